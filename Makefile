@@ -1,0 +1,111 @@
+# Agglo build, run and test. `make help` lists the targets.
+# MODE=release (default) or MODE=debug; NP = ranks for `make run`.
+SHELL := /bin/bash
+.DEFAULT_GOAL := help
+
+MODE  ?= release
+NP    ?= 2
+BUILD ?= build
+DECK  ?= input/default.nml
+
+FC := mpifort
+CC := mpicc
+MULTIARCH := $(shell gcc -print-multiarch 2>/dev/null || echo x86_64-linux-gnu)
+HDF5_INC := /usr/include/hdf5/openmpi
+HDF5_LIB := /usr/lib/$(MULTIARCH)/hdf5/openmpi
+
+# -fwrapv: the random streams rely on two's-complement integer wrap-around.
+COMMON_FLAGS := -fwrapv -fimplicit-none -ffree-line-length-132
+ifeq ($(MODE),debug)
+  MODE_FLAGS := -O0 -g -fcheck=all -ffpe-trap=invalid,zero,overflow -Wall -fbacktrace
+else ifeq ($(MODE),release)
+  MODE_FLAGS := -O3 -march=native -funroll-loops
+else
+  $(error MODE must be release or debug, not '$(MODE)')
+endif
+OBJ := $(BUILD)/obj
+MOD := $(BUILD)/mod
+FFLAGS := $(COMMON_FLAGS) $(MODE_FLAGS) -J$(MOD) -I$(MOD) -I/usr/include -I$(HDF5_INC)
+CFLAGS := -O2 -I/usr/include/hypre
+LIBS := -L$(HDF5_LIB) -Wl,-rpath,$(HDF5_LIB) -lhdf5_fortran -lhdf5 -lfftw3_mpi -lfftw3 -lHYPRE -llapack -lblas
+
+SRC_DIRS := $(shell find src -type d)
+SOURCES := $(shell find src -name '*.f90' | sort)
+C_SOURCES := $(shell find src -name '*.c' | sort)
+LIB_SOURCES := $(filter-out src/agglo.f90,$(SOURCES))
+LIB_OBJECTS := $(patsubst %.f90,$(OBJ)/%.o,$(notdir $(LIB_SOURCES))) $(patsubst %.c,$(OBJ)/%.o,$(notdir $(C_SOURCES)))
+TEST_SOURCES := $(shell find tests -name 'test_*.f90' ! -path 'tests/framework/*' | sort)
+TEST_SUPPORT := $(shell find tests -name '*.f90' \( -path 'tests/framework/*' -o ! -name 'test_*.f90' \) | sort)
+TEST_DIRS := $(shell find tests -type d)
+TEST_PROGRAMS := $(patsubst %.f90,$(BUILD)/tests/%,$(notdir $(TEST_SOURCES)))
+TEST_SUPPORT_OBJECTS := $(patsubst %.f90,$(OBJ)/%.o,$(notdir $(TEST_SUPPORT)))
+
+vpath %.f90 $(SRC_DIRS) $(TEST_DIRS)
+vpath %.c $(SRC_DIRS)
+
+DEB_PACKAGES := gfortran libopenmpi-dev openmpi-bin libfftw3-dev libfftw3-mpi-dev libhdf5-openmpi-dev \
+                libhypre-dev liblapack-dev libblas-dev pkg-config hdf5-tools python3 python3-venv
+
+export OMPI_ALLOW_RUN_AS_ROOT := 1
+export OMPI_ALLOW_RUN_AS_ROOT_CONFIRM := 1
+MPIRUN := mpirun --oversubscribe
+
+.PHONY: help deps build run test bench clean tools-deps
+help: ## list the targets
+	@echo "Agglo - make targets (MODE=release|debug, NP=ranks, DECK=deck for run):"
+	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | sed -E 's/^([a-z-]+):.*## (.*)/  make \1\t\2/' | expand -t 20
+
+deps: ## install the Debian packages Agglo needs (only those missing)
+	@missing=""; for p in $(DEB_PACKAGES); do \
+	  dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q 'install ok installed' || missing="$$missing $$p"; \
+	done; \
+	if [ -n "$$missing" ]; then \
+	  echo "deps: installing$$missing"; \
+	  if [ "$$(id -u)" = 0 ]; then SUDO=""; elif command -v sudo >/dev/null; then SUDO=sudo; else \
+	    echo "deps: missing Debian packages:$$missing; run as root: apt-get install -y$$missing" >&2; exit 1; fi; \
+	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq $$missing >/dev/null \
+	    || { echo "deps: apt-get could not install:$$missing" >&2; exit 1; }; \
+	fi
+
+build: $(BUILD)/agglo ## build build/agglo (out of source)
+
+$(BUILD)/agglo: $(OBJ)/agglo.o $(BUILD)/libagglo.a
+	$(FC) $(FFLAGS) -o $@ $^ $(LIBS)
+
+$(BUILD)/libagglo.a: $(LIB_OBJECTS)
+	@rm -f $@
+	ar rcs $@ $^
+
+$(OBJ)/%.o: %.f90 | $(OBJ) $(MOD)
+	$(FC) $(FFLAGS) -c $< -o $@
+
+$(OBJ)/%.o: %.c | $(OBJ)
+	$(CC) $(CFLAGS) -c $< -o $@
+
+$(BUILD)/tests/%: $(OBJ)/%.o $(TEST_SUPPORT_OBJECTS) $(BUILD)/libagglo.a | $(BUILD)/tests
+	$(FC) $(FFLAGS) -o $@ $< $(TEST_SUPPORT_OBJECTS) $(BUILD)/libagglo.a $(LIBS)
+
+$(OBJ) $(MOD) $(BUILD)/tests:
+	@mkdir -p $@
+
+# Module dependencies, generated from the sources (never maintained by hand).
+$(BUILD)/deps.mk: $(SOURCES) $(TEST_SOURCES) $(TEST_SUPPORT) tools/fortran-deps.sh | $(OBJ)
+	@tools/fortran-deps.sh $(OBJ) $(SOURCES) $(TEST_SUPPORT) $(TEST_SOURCES) > $@
+ifneq ($(filter-out help clean deps tools-deps,$(MAKECMDGOALS)),)
+include $(BUILD)/deps.mk
+endif
+
+run: deps ## install, build, and run DECK (default input/default.nml) on NP ranks
+	@$(MAKE) --no-print-directory build
+	$(MPIRUN) -np $(NP) $(BUILD)/agglo $(DECK)
+
+test: deps ## install, build, and run every test (closing line "N passed, N failed")
+	@$(MAKE) --no-print-directory build $(TEST_PROGRAMS)
+	@BUILD=$(BUILD) tests/run_tests.sh
+
+bench: deps ## run the benchmarks (results for docs/performance.md)
+	@$(MAKE) --no-print-directory build $(TEST_PROGRAMS)
+	@BUILD=$(BUILD) tools/bench.sh
+
+clean: ## remove the build directory
+	rm -rf $(BUILD)

@@ -1,0 +1,67 @@
+!> Namelist group &fluid: fluid properties, discretisation options and the initial field.
+module config_fluid
+  use agglo_kinds, only: wp
+  use deck_file, only: deck_t, check_namelist_read, require_positive, require_nonnegative, require_option
+  implicit none
+  private
+  public :: fluid_config_t, read_fluid_group, check_fluid_group, write_fluid_group
+
+  type :: fluid_config_t
+    real(wp) :: density = 997.0_wp                 !< kg/m^3, water at 20 C (paper, Table 2)
+    real(wp) :: viscosity = 1.0e-6_wp              !< m^2/s, kinematic (paper, Table 2)
+    character(len=16) :: viscous_scheme = 'explicit'  !< 'explicit' | 'crank_nicolson'
+    character(len=16) :: init = 'rest'             !< 'rest' | 'taylor_green' | 'random' | 'file'
+    character(len=256) :: init_file = ''           !< field file for init = 'file'
+    real(wp) :: init_amplitude = 1.0e-3_wp         !< m/s, velocity scale of 'taylor_green' / rms of 'random'
+    real(wp) :: init_peak_wavenumber = 2.0_wp      !< spectrum peak of 'random', in units of 2 pi / length_x
+  end type fluid_config_t
+
+  real(wp) :: density, viscosity, init_amplitude, init_peak_wavenumber
+  character(len=16) :: viscous_scheme, init
+  character(len=256) :: init_file
+  namelist /fluid/ density, viscosity, viscous_scheme, init, init_file, init_amplitude, init_peak_wavenumber
+
+contains
+
+  subroutine to_namelist(cfg)
+    type(fluid_config_t), intent(in) :: cfg
+    density = cfg%density; viscosity = cfg%viscosity; viscous_scheme = cfg%viscous_scheme
+    init = cfg%init; init_file = cfg%init_file; init_amplitude = cfg%init_amplitude
+    init_peak_wavenumber = cfg%init_peak_wavenumber
+  end subroutine to_namelist
+
+  subroutine from_namelist(cfg)
+    type(fluid_config_t), intent(inout) :: cfg
+    cfg%density = density; cfg%viscosity = viscosity; cfg%viscous_scheme = viscous_scheme
+    cfg%init = init; cfg%init_file = init_file; cfg%init_amplitude = init_amplitude
+    cfg%init_peak_wavenumber = init_peak_wavenumber
+  end subroutine from_namelist
+
+  subroutine read_fluid_group(deck, cfg)
+    type(deck_t), intent(in) :: deck
+    type(fluid_config_t), intent(out) :: cfg
+    integer :: ios
+    character(len=512) :: message
+    call to_namelist(cfg)
+    read(deck%lines, nml=fluid, iostat=ios, iomsg=message)
+    call check_namelist_read('fluid', ios, message)
+    call from_namelist(cfg)
+  end subroutine read_fluid_group
+
+  subroutine check_fluid_group(cfg)
+    type(fluid_config_t), intent(in) :: cfg
+    call require_positive('fluid', 'density', cfg%density)
+    call require_positive('fluid', 'viscosity', cfg%viscosity)
+    call require_option('fluid', 'viscous_scheme', cfg%viscous_scheme, [character(len=16) :: 'explicit', 'crank_nicolson'])
+    call require_option('fluid', 'init', cfg%init, [character(len=16) :: 'rest', 'taylor_green', 'random', 'file'])
+    call require_nonnegative('fluid', 'init_amplitude', cfg%init_amplitude)
+    call require_positive('fluid', 'init_peak_wavenumber', cfg%init_peak_wavenumber)
+  end subroutine check_fluid_group
+
+  subroutine write_fluid_group(unit, cfg)
+    integer, intent(in) :: unit
+    type(fluid_config_t), intent(in) :: cfg
+    call to_namelist(cfg)
+    write(unit, nml=fluid)
+  end subroutine write_fluid_group
+end module config_fluid
