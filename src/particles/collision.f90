@@ -24,11 +24,20 @@ module collision
   use config_collision, only: collision_config_t
   use rigid_body, only: rigid_body_t, inverse_inertia_lab, point_velocity, set_angular_velocity_lab, &
                         angular_velocity_lab
+  use closest_points, only: closest_points_t
   use logger, only: log_line
   implicit none
   private
   public :: collision_model_t, collision_result_t, collision_setup, collision_log_settings, detection_distance, &
             collision_detected, approach_speed, collide, contact_matrix, contact_impulse
+
+  !> Both take either the closest-points result of the pair or its parts (gap, points, normal).
+  interface collision_detected
+    module procedure collision_detected_gap, collision_detected_contact
+  end interface collision_detected
+  interface collide
+    module procedure collide_points, collide_contact
+  end interface collide
   public :: collision_paper, collision_frictionless, collision_coulomb
   public :: regime_stick, regime_slide, regime_frictionless, regime_elastic_limit, regime_no_impulse
 
@@ -93,11 +102,30 @@ contains
   end function detection_distance
 
   !> A collision: approaching and the gap (signed, < 0 overlap) below the detection distance.
-  pure logical function collision_detected(model, gap, normal_speed, dt)
+  pure logical function collision_detected_gap(model, gap, normal_speed, dt)
     type(collision_model_t), intent(in) :: model
     real(wp), intent(in) :: gap, normal_speed, dt
-    collision_detected = normal_speed > 0.0_wp .and. gap < detection_distance(model, normal_speed, dt)
-  end function collision_detected
+    collision_detected_gap = normal_speed > 0.0_wp .and. gap < detection_distance(model, normal_speed, dt)
+  end function collision_detected_gap
+
+  !> The same test from the pair's closest points (module closest_points) and the bodies' velocities.
+  pure logical function collision_detected_contact(model, body1, body2, contact, dt)
+    type(collision_model_t), intent(in) :: model
+    type(rigid_body_t), intent(in) :: body1, body2
+    type(closest_points_t), intent(in) :: contact
+    real(wp), intent(in) :: dt
+    collision_detected_contact = collision_detected_gap(model, contact%gap, &
+        approach_speed(body1, body2, contact%point1, contact%point2, contact%normal), dt)
+  end function collision_detected_contact
+
+  !> collide() from the pair's closest points.
+  pure subroutine collide_contact(model, body1, body2, contact, result)
+    type(collision_model_t), intent(in) :: model
+    type(rigid_body_t), intent(inout) :: body1, body2
+    type(closest_points_t), intent(in) :: contact
+    type(collision_result_t), intent(out) :: result
+    call collide_points(model, body1, body2, contact%point1, contact%point2, contact%normal, result)
+  end subroutine collide_contact
 
   !> Normal approach speed of the closest points x1 (on body 1) and x2 (on body 2):
   !> (u(x1) - u(x2)).n, > 0 approaching (n from 1 to 2).
@@ -187,7 +215,7 @@ contains
   !> Resolve a collision between body1 and body2 with closest points x1, x2 and normal n (1 -> 2):
   !> impulse at x_c = (x1 + x2)/2, both bodies updated in place. Nothing happens if the contact
   !> point is not approaching (result%regime = regime_no_impulse).
-  pure subroutine collide(model, body1, body2, point1, point2, normal, result)
+  pure subroutine collide_points(model, body1, body2, point1, point2, normal, result)
     type(collision_model_t), intent(in) :: model
     type(rigid_body_t), intent(inout) :: body1, body2
     real(wp), intent(in) :: point1(3), point2(3), normal(3)
@@ -214,7 +242,7 @@ contains
     end if
     result%normal_velocity_after = dot_product(point_velocity(body1, xc) - point_velocity(body2, xc), n)
     result%energy_change = pair_energy(body1, body2) - energy_before
-  end subroutine collide
+  end subroutine collide_points
 
   pure real(wp) function pair_energy(body1, body2)
     type(rigid_body_t), intent(in) :: body1, body2

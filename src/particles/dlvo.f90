@@ -11,11 +11,16 @@ module dlvo
   use physical_constants, only: pi, boltzmann_constant, elementary_charge, vacuum_permittivity
   use config_dlvo, only: dlvo_config_t
   use logger, only: log_line
+  use spheroid, only: spheroid_t, principal_curvatures, principal_directions
+  use quaternion, only: rotate_to_lab
+  use closest_points, only: closest_points_t
+  use rigid_body, only: rigid_body_t, point_velocity
   implicit none
   private
   public :: dlvo_model_t, dlvo_setup, dlvo_log_constants, dlvo_force, dlvo_vdw_force, dlvo_edl_force, &
             dlvo_energy, dlvo_pair_forces, curvature_factor, chi_eta_eq14, chi_eta_derjaguin, &
-            alpha_sine_squared, ion_number_density, grahame_surface_potential, reduced_surface_potential
+            alpha_sine_squared, ion_number_density, grahame_surface_potential, reduced_surface_potential, &
+            dlvo_evaluation_t, dlvo_evaluate, contact_curvature_factor, relative_normal_energy, escape_energy
   public :: curvature_eq14, curvature_derjaguin, curvature_none
 
   integer, parameter :: curvature_eq14 = 1, curvature_derjaguin = 2, curvature_none = 3
@@ -38,7 +43,83 @@ module dlvo
     real(wp) :: edl_coefficient = 0.0_wp         !< 64 pi r n k_B T Theta^2 / kappa, N
   end type dlvo_model_t
 
+  !> Everything Eq. 13 gives for one pair configuration (outputs: force_dlvo, torque_dlvo, chi_eta,
+  !> vdw_force of particles.h5).
+  type :: dlvo_evaluation_t
+    real(wp) :: chi_eta = 1.0_wp       !< curvature factor used
+    real(wp) :: force = 0.0_wp         !< N, scalar total (> 0 repulsive)
+    real(wp) :: vdw_force = 0.0_wp     !< N, scalar vdW part (< 0)
+    real(wp) :: edl_force = 0.0_wp     !< N, scalar EDL part (> 0)
+    real(wp) :: energy = 0.0_wp        !< J, U(h) at the same chi_eta
+    real(wp) :: force1(3) = 0.0_wp, torque1(3) = 0.0_wp   !< lab, on body 1 (torque about its centre)
+    real(wp) :: force2(3) = 0.0_wp, torque2(3) = 0.0_wp   !< lab, on body 2
+  end type dlvo_evaluation_t
+
 contains
+
+  !> chi_eta at the closest points: curvatures from each point's parametric phi (k = meridional,
+  !> k' = parallel, physics.md sec. 7), alpha between the two meridian tangents (turned to the lab
+  !> frame) projected onto the tangent plane of the common normal.
+  pure real(wp) function contact_curvature_factor(model, shape1, orientation1, shape2, orientation2, contact)
+    type(dlvo_model_t), intent(in) :: model
+    type(spheroid_t), intent(in) :: shape1, shape2
+    real(wp), intent(in) :: orientation1(4), orientation2(4)
+    type(closest_points_t), intent(in) :: contact
+    real(wp) :: k1, k1p, k2, k2p, meridian1(3), meridian2(3), parallel(3)
+    call principal_curvatures(shape1, contact%phi1, k1, k1p)
+    call principal_curvatures(shape2, contact%phi2, k2, k2p)
+    call principal_directions(shape1, contact%theta1, contact%phi1, meridian1, parallel)
+    call principal_directions(shape2, contact%theta2, contact%phi2, meridian2, parallel)
+    contact_curvature_factor = curvature_factor(model, k1, k1p, k2, k2p, &
+        alpha_sine_squared(rotate_to_lab(orientation1, meridian1), rotate_to_lab(orientation2, meridian2), contact%normal))
+  end function contact_curvature_factor
+
+  !> Eq. 13 for the pair: chi_eta at the closest points, forces along the normal at the closest points.
+  pure subroutine dlvo_evaluate(model, shape1, body1, shape2, body2, contact, evaluation)
+    type(dlvo_model_t), intent(in) :: model
+    type(spheroid_t), intent(in) :: shape1, shape2
+    type(rigid_body_t), intent(in) :: body1, body2
+    type(closest_points_t), intent(in) :: contact
+    type(dlvo_evaluation_t), intent(out) :: evaluation
+    evaluation%chi_eta = contact_curvature_factor(model, shape1, body1%quaternion, shape2, body2%quaternion, contact)
+    evaluation%vdw_force = dlvo_vdw_force(model, contact%gap, evaluation%chi_eta)
+    evaluation%edl_force = dlvo_edl_force(model, contact%gap, evaluation%chi_eta)
+    evaluation%force = evaluation%vdw_force + evaluation%edl_force
+    evaluation%energy = dlvo_energy(model, contact%gap, evaluation%chi_eta)
+    call dlvo_pair_forces(model, contact%gap, evaluation%chi_eta, contact%normal, contact%point1, contact%point2, &
+                          body1%position, body2%position, evaluation%force1, evaluation%torque1, evaluation%force2, &
+                          evaluation%torque2)
+  end subroutine dlvo_evaluate
+
+  !> Kinetic energy available to separate the pair (bound-state test, physics.md sec. 7): the normal
+  !> relative velocity of the closest points with the reduced mass, mu v_n^2 / 2 (the pair's common
+  !> rotation is not energy that can separate it).
+  pure real(wp) function relative_normal_energy(body1, body2, contact)
+    type(rigid_body_t), intent(in) :: body1, body2
+    type(closest_points_t), intent(in) :: contact
+    real(wp) :: normal_speed, reduced_mass
+    normal_speed = dot_product(point_velocity(body1, contact%point1) - point_velocity(body2, contact%point2), contact%normal)
+    reduced_mass = body1%mass * body2%mass / (body1%mass + body2%mass)
+    relative_normal_energy = 0.5_wp * reduced_mass * normal_speed**2
+  end function relative_normal_energy
+
+  !> Energy needed to escape from gap h to infinity at fixed chi_eta: max(0, max_{h' >= h} U(h')) - U(h)
+  !> (the EDL barrier, if any, lies within a few Debye lengths; beyond 60 of them U < 0 and rises to 0).
+  !> The pair is bound when relative_normal_energy < escape_energy.
+  pure real(wp) function escape_energy(model, gap, chi_eta)
+    type(dlvo_model_t), intent(in) :: model
+    real(wp), intent(in) :: gap, chi_eta
+    real(wp) :: top, h, span
+    integer :: i
+    integer, parameter :: samples = 400
+    top = 0.0_wp
+    span = 60.0_wp / model%debye_kappa
+    do i = 0, samples
+      h = max(gap, 0.0_wp) + span * (real(i, wp) / samples)**2
+      top = max(top, dlvo_energy(model, h, chi_eta))
+    end do
+    escape_energy = top - dlvo_energy(model, gap, chi_eta)
+  end function escape_energy
 
   !> Ion number density of a z:z electrolyte from the Debye parameter:
   !> kappa^2 = 2 n z^2 e^2 / (eps_r eps0 k_B T) (Israelachvili 1992, ch. 12).

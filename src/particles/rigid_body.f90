@@ -19,9 +19,11 @@ module rigid_body
   use agglo_kinds, only: wp
   use quaternion, only: quaternion_advance, rotation_matrix, rotate_to_lab, rotate_to_body, quaternion_normalise
   use error_handling, only: fatal
+  use spheroid, only: spheroid_t
   implicit none
   private
-  public :: rigid_body_t, rigid_body_init, rigid_body_step, rigid_body_kick, rigid_body_drift, rigid_body_substeps, &
+  public :: rigid_body_t, rigid_body_init, rigid_body_of_spheroid, rigid_body_step, rigid_body_kick, rigid_body_drift, &
+            rigid_body_substeps, &
             angular_velocity_lab, set_angular_velocity_lab, inverse_inertia_lab, inertia_lab, point_velocity, &
             kinetic_energy, translational_kinetic_energy, rotational_kinetic_energy, linear_momentum, &
             angular_momentum, integrator_code, integrator_euler, integrator_verlet
@@ -64,6 +66,15 @@ contains
     if (present(velocity)) body%velocity = velocity
     if (present(angular_velocity)) body%angular_velocity_body = rotate_to_body(body%quaternion, angular_velocity)
   end subroutine rigid_body_init
+
+  !> A body with the analytic mass and inertia (Eq. 12) of a spheroid shape (module spheroid).
+  pure subroutine rigid_body_of_spheroid(body, shape, position, quaternion, velocity, angular_velocity)
+    type(rigid_body_t), intent(out) :: body
+    type(spheroid_t), intent(in) :: shape
+    real(wp), intent(in) :: position(3), quaternion(4)
+    real(wp), intent(in), optional :: velocity(3), angular_velocity(3)
+    call rigid_body_init(body, shape%mass, shape%inertia, position, quaternion, velocity, angular_velocity)
+  end subroutine rigid_body_of_spheroid
 
   pure function angular_velocity_lab(body) result(omega)
     type(rigid_body_t), intent(in) :: body

@@ -20,9 +20,18 @@
 module stokes_resistance
   use agglo_kinds, only: wp
   use physical_constants, only: pi
+  use spheroid, only: spheroid_t
+  use rigid_body, only: rigid_body_t, angular_velocity_lab
+  use quaternion, only: rotation_matrix
   implicit none
   private
-  public :: stokes_resistance_t, stokes_resistance_setup, spheroid_resistance_coefficients, stokes_loads_lab
+  public :: stokes_resistance_t, stokes_resistance_setup, spheroid_resistance_coefficients, stokes_loads_lab, &
+            stokes_loads, stokes_resistance_of
+
+  !> Drag of a rigid_body_t, or of explicit velocities and a rotation matrix.
+  interface stokes_loads
+    module procedure stokes_loads_body
+  end interface stokes_loads
 
   !> Diagonal resistance tensors in the body frame (x = symmetry axis): index 1 axial, 2 and 3 transverse.
   type :: stokes_resistance_t
@@ -92,6 +101,23 @@ contains
     resistance%translational = 6.0_wp * pi * dynamic_viscosity * r * [coefficients(1), coefficients(2), coefficients(2)]
     resistance%rotational = 8.0_wp * pi * dynamic_viscosity * r**3 * [coefficients(3), coefficients(4), coefficients(4)]
   end subroutine stokes_resistance_setup
+
+  !> Resistances of a spheroid shape (module spheroid) in a fluid of dynamic viscosity mu = rho_f nu.
+  pure function stokes_resistance_of(shape, dynamic_viscosity) result(resistance)
+    type(spheroid_t), intent(in) :: shape
+    real(wp), intent(in) :: dynamic_viscosity
+    type(stokes_resistance_t) :: resistance
+    call stokes_resistance_setup(resistance, shape%a, shape%b, dynamic_viscosity)
+  end function stokes_resistance_of
+
+  !> Lab-frame drag force and torque (about the centre) on a body in quiescent fluid.
+  pure subroutine stokes_loads_body(resistance, body, force, torque)
+    type(stokes_resistance_t), intent(in) :: resistance
+    type(rigid_body_t), intent(in) :: body
+    real(wp), intent(out) :: force(3), torque(3)
+    call stokes_loads_lab(resistance, rotation_matrix(body%quaternion), body%velocity, angular_velocity_lab(body), &
+                          force, torque)
+  end subroutine stokes_loads_body
 
   !> Lab-frame drag force and torque on a spheroid with lab velocity U and lab angular velocity
   !> Omega in quiescent fluid; rotation = R(q), body -> lab: F = -R diag(zeta_t) R^T U, T likewise.

@@ -6,7 +6,11 @@ program test_dlvo
   use config_dlvo, only: dlvo_config_t
   use dlvo, only: dlvo_model_t, dlvo_setup, dlvo_force, dlvo_vdw_force, dlvo_edl_force, dlvo_energy, &
                   dlvo_pair_forces, chi_eta_eq14, chi_eta_derjaguin, alpha_sine_squared, curvature_factor, &
-                  dlvo_log_constants
+                  dlvo_log_constants, dlvo_evaluation_t, dlvo_evaluate, escape_energy, relative_normal_energy
+  use spheroid, only: spheroid_t, make_spheroid
+  use closest_points, only: closest_points_t, find_closest_points
+  use rigid_body, only: rigid_body_t, rigid_body_of_spheroid
+  use quaternion, only: quaternion_from_axis_angle
   use test_framework, only: test_start, test_finish, check, check_close, check_below
   implicit none
   type(dlvo_config_t) :: cfg
@@ -122,9 +126,57 @@ program test_dlvo
   finite = finite .and. f == f .and. abs(f) < huge(1.0_wp)
   call check(finite, 'finite_at_extreme_gaps')
 
+  call contact_checks()
   call test_finish()
 
 contains
+
+  !> The same factors from real contacts: closest points (module closest_points) of spheres and of
+  !> needles side by side (parallel, and crossed by turning body 2 by 90 deg about the normal y).
+  subroutine contact_checks()
+    type(spheroid_t) :: sphere, needle
+    type(rigid_body_t) :: body1, body2
+    type(closest_points_t) :: contact
+    type(dlvo_evaluation_t) :: ev
+    real(wp) :: q2(4), lab_torque(3)
+    sphere = make_spheroid('sphere', r, 2710.0_wp)
+    needle = make_spheroid('needle', r, 2710.0_wp, 5.0_wp)
+    call rigid_body_of_spheroid(body1, sphere, [0.0_wp, 0.0_wp, 0.0_wp], [1.0_wp, 0.0_wp, 0.0_wp, 0.0_wp])
+    call rigid_body_of_spheroid(body2, sphere, [1.0e-5_wp, 2.0_wp * r, 3.0e-5_wp] / norm2([1.0e-5_wp, 2.0_wp * r, 3.0e-5_wp]) &
+                                * (2.0_wp * r + 8.0e-9_wp), [1.0_wp, 0.0_wp, 0.0_wp, 0.0_wp])
+    call find_closest_points(sphere, body1%position, body1%quaternion, sphere, body2%position, body2%quaternion, contact)
+    call dlvo_evaluate(model, sphere, body1, sphere, body2, contact, ev)
+    call check_close(ev%chi_eta, 1.0_wp, 1.0e-12_wp, 'contact_spheres_chi_eta')
+    call check_close(ev%force, dlvo_force(model, 8.0e-9_wp, 1.0_wp), 1.0e-6_wp, 'contact_spheres_force_8nm')
+    ! Spheres: the force passes through both centres, so no torque.
+    call check_below(norm2(ev%torque1) + norm2(ev%torque2), 1.0e-12_wp * norm2(ev%force1) * r, 'contact_spheres_no_torque')
+    ! Parallel needles side by side at 10 nm.
+    call rigid_body_of_spheroid(body1, needle, [0.0_wp, 0.0_wp, 0.0_wp], [1.0_wp, 0.0_wp, 0.0_wp, 0.0_wp])
+    call rigid_body_of_spheroid(body2, needle, [0.0_wp, 2.0_wp * needle%b + 10.0e-9_wp, 0.0_wp], [1.0_wp, 0.0_wp, 0.0_wp, 0.0_wp])
+    call find_closest_points(needle, body1%position, body1%quaternion, needle, body2%position, body2%quaternion, contact)
+    call dlvo_evaluate(model, needle, body1, needle, body2, contact, ev)
+    call check_close(ev%chi_eta, 1.1246222_wp, 1.0e-7_wp, 'contact_parallel_needles_eq14')
+    call check_close(contact%gap, 10.0e-9_wp, 1.0e-6_wp, 'contact_parallel_needles_gap')
+    ! Crossed needles.
+    q2 = quaternion_from_axis_angle([0.0_wp, 1.0_wp, 0.0_wp], acos(-1.0_wp) / 2.0_wp)
+    call rigid_body_of_spheroid(body2, needle, [0.0_wp, 2.0_wp * needle%b + 10.0e-9_wp, 0.0_wp], q2)
+    call find_closest_points(needle, body1%position, body1%quaternion, needle, body2%position, body2%quaternion, contact)
+    call dlvo_evaluate(model, needle, body1, needle, body2, contact, ev)
+    call check_close(ev%chi_eta, 0.8263763_wp, 1.0e-7_wp, 'contact_crossed_needles_eq14')
+    ! Off-centre needle pair: torques, and the pair's angular momentum balance about the origin.
+    q2 = quaternion_from_axis_angle([0.3_wp, 0.5_wp, 0.8_wp] / norm2([0.3_wp, 0.5_wp, 0.8_wp]), 0.9_wp)
+    call rigid_body_of_spheroid(body2, needle, [6.0e-5_wp, 9.0e-5_wp, 2.0e-5_wp], q2)
+    call find_closest_points(needle, body1%position, body1%quaternion, needle, body2%position, body2%quaternion, contact)
+    call check(contact%converged .and. contact%gap > 0.0_wp, 'contact_oblique_needles_separated')
+    call dlvo_evaluate(model, needle, body1, needle, body2, contact, ev)
+    lab_torque = ev%torque1 + cross(body1%position, ev%force1) + ev%torque2 + cross(body2%position, ev%force2)
+    call check_below(norm2(lab_torque), 1.0e-9_wp * norm2(ev%torque1), 'contact_oblique_torque_balance')
+    call check(norm2(ev%torque1) > 0.0_wp, 'contact_oblique_has_torque')
+    ! Bound-state energy: with Table 1 there is no EDL barrier, so the escape energy at the cut-off
+    ! is -U(5 nm) = 1.8475e-17 J (equal spheres, physics.md sec. 7: ~1.9e-17 J).
+    call check_close(escape_energy(model, 5.0e-9_wp, 1.0_wp), 1.8475188693778787e-17_wp, 1.0e-9_wp, 'escape_energy_spheres_5nm')
+    call check_close(relative_normal_energy(body1, body1, contact), 0.0_wp, 0.0_wp, 'relative_energy_at_rest', abs_tol=0.0_wp)
+  end subroutine contact_checks
 
   function gap_name(gap) result(name)
     real(wp), intent(in) :: gap
