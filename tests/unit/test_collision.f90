@@ -20,9 +20,7 @@ program test_collision
   real(wp), parameter :: r = 50.0e-6_wp, density = 2710.0_wp, restitutions(3) = [0.0_wp, 0.4_wp, 1.0_wp]
   type(collision_config_t) :: cfg
   type(collision_model_t) :: model
-  type(collision_result_t) :: result
-  type(rigid_body_t) :: b1, b2
-  real(wp) :: e, mass1, mass2, v(3), n(3), k(3, 3), impulse(3), used
+  real(wp) :: e, v(3), n(3), k(3, 3), impulse(3), used
   integer :: i, regime
 
   call test_start('collision')
@@ -135,7 +133,7 @@ contains
     count_collisions = 0; count_limited = 0; count_slide = 0
     do trial = 1, 2000
       axes1 = semi_axes(ratios(1 + mod(trial, 5)))
-      axes2 = semi_axes(ratios(1 + mod(trial / 5, 5)))
+      axes2 = semi_axes(ratios(1 + mod((trial - 1) / 5, 5)))
       mass1 = density * 4.0_wp / 3.0_wp * pi * axes1(1) * axes1(2)**2
       mass2 = density * 4.0_wp / 3.0_wp * pi * axes2(1) * axes2(2)**2
       q1 = quaternion_normalise([stream_normal(stream), stream_normal(stream), stream_normal(stream), stream_normal(stream)])
