@@ -125,6 +125,50 @@ program test_closest_points
   call random_pairs_vs_brute_force()
   write(*, '(a,f8.2,a)') '  random pairs incl. brute force: ', wall_time() - t0, ' s'
 
+  ! --- Near-parallel flat faces: aspect-ratio-20 disks face to face, tilted by 1e-7 .. 1e-2 rad,
+  ! laterally offset, gaps 0.1 nm .. 1 um, against brute force.
+  worst = 0.0_wp
+  do k = 1, 40
+    q1 = random_orientation(stream)
+    rot = rotation_matrix(q1)
+    q2 = quaternion_product(q1, quaternion_from_axis_angle([0.0_wp, stream_normal(stream), stream_normal(stream)], &
+                                                           10.0_wp ** (-7.0_wp + 5.0_wp * stream_uniform(stream))))
+    gap = 10.0_wp ** (-10.0_wp + 4.0_wp * stream_uniform(stream))
+    c1 = [0.5e-3_wp, 0.5e-3_wp, 0.5e-3_wp]
+    u = rot(:,1) + 0.3_wp * disk20%b / disk20%a * stream_uniform(stream) * rot(:,2)
+    u = u / norm2(u)
+    c2 = c1 + u * (support_value(disk20, matmul(u, rot)) + support_value(disk20, matmul(-u, rotation_matrix(q2))) + gap)
+    call find_closest_points(disk20, c1, q1, disk20, c2, q2, res)
+    reference = brute_force_gap(disk20, c1, rot, disk20, c2, rotation_matrix(q2))
+    worst = max(worst, abs(res%gap - reference) / radius, merge(0.0_wp, 1.0_wp, res%converged))
+  end do
+  call check_below(worst, 1.0e-9_wp, 'near_parallel_disk_faces_vs_brute_force')
+
+  ! --- Cold-started overlaps of extreme shapes: a separated pair is pushed along its common normal
+  ! by its gap plus depth (0.1 nm .. 0.1 um), so the closest points pass each other and the pair
+  ! overlaps with a penetration depth of at most that depth (minimum translation distance).
+  ! Expected: converged, gap in [-depth, 0).
+  worst = 0.0_wp
+  do k = 1, 400
+    body1 = merge(needle20, disk20, mod(k, 2) == 0)
+    body2 = merge(needle20, disk20, mod(k / 2, 2) == 0)
+    gap = -10.0_wp ** (-10.0_wp + 3.0_wp * stream_uniform(stream))
+    q1 = random_orientation(stream)
+    q2 = random_orientation(stream)
+    u = random_unit()
+    c1 = 0.0_wp
+    c2 = u * (support_value(body1, matmul(u, rotation_matrix(q1))) + support_value(body2, matmul(-u, rotation_matrix(q2))) &
+              + 1.0e-6_wp)
+    call find_closest_points(body1, c1, q1, body2, c2, q2, res)
+    c2 = c2 - (res%gap - gap) * res%normal
+    call find_closest_points(body1, c1, q1, body2, c2, q2, res)
+    if (.not. res%converged .or. res%gap >= 0.0_wp .or. res%gap < gap - 1.0e-12_wp * radius) then
+      worst = max(worst, 1.0_wp)
+      write(*, '(a,i0,2es12.4,1x,a)') '  overlap case ', k, gap, res%gap, trim(res%message)
+    end if
+  end do
+  call check_below(worst, 0.0_wp, 'cold_started_overlaps_extreme_shapes')
+
   ! --- Warm start: after a small relative motion the previous normal converges in <= 3 iterations.
   c1 = [0.0_wp, 0.0_wp, 0.0_wp]
   q1 = random_orientation(stream)
@@ -231,6 +275,7 @@ contains
       ratio = 10.0_wp ** (log10(20.0_wp) * stream_uniform(stream))
       if (mod(k, 16) == 1) ratio = 20.0_wp
       if (mod(k, 16) == 2) ratio = 1.0001_wp
+      if (mod(k, 16) == 3) ratio = 1.0_wp
       select case (kind)
       case (0); name1 = 'needle'; name2 = 'needle'
       case (1); name1 = 'disk'; name2 = 'disk'
@@ -241,6 +286,7 @@ contains
       body2 = make_spheroid(name2, radius * (0.5_wp + stream_uniform(stream)), density, &
                             10.0_wp ** (log10(20.0_wp) * stream_uniform(stream)))
       target = 10.0_wp ** (-9.0_wp + 5.0_wp * stream_uniform(stream))     ! 1 nm .. 100 um
+      if (mod(k, 50) == 0) target = 1.0e-10_wp                             ! extreme: 0.1 nm
       q1 = random_orientation(stream)
       q2 = random_orientation(stream)
       u = random_unit()
@@ -286,7 +332,7 @@ contains
     call check_below(worst_consistency, 1.01e-12_wp, 'random_pairs_points_on_surfaces_and_aligned')
     ! The certified bracket [gap, gap + bound] of the true distance is tight.
     call check_below(worst_bound, 1.0e-12_wp, 'random_pairs_distance_certificate')
-    call check(smallest_gap < 2.0e-9_wp .and. largest_gap > 5.0e-5_wp, 'random_pairs_span_1nm_to_100um')
+    call check(smallest_gap < 2.0e-10_wp .and. largest_gap > 5.0e-5_wp, 'random_pairs_span_0.1nm_to_100um')
   end subroutine random_pairs_vs_brute_force
 
 
