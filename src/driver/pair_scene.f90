@@ -69,14 +69,11 @@ contains
     step = 0_i8
     max_vdw_force = 0.0_wp
     summary%collisions = 0
-    call evaluate_loads(models, pair, loads)
-    call write_sample(output, time, pair, loads)
     wall_start = wall_time()
     finished = .false.
-    do while (.not. finished)
-      call advance(models, pair, loads, dt)
-      time = time + dt
-      step = step + 1
+    do
+      ! The collision test comes first, on the current state: with a detection distance of
+      ! v_n dt the pair is caught before a step could carry it into overlap.
       loads%force_collision = 0.0_wp
       loads%torque_collision = 0.0_wp
       if (models%collisions) then
@@ -91,12 +88,16 @@ contains
           end if
         end if
       end if
-      max_vdw_force = max(max_vdw_force, abs(loads%vdw_force))
-      finished = time >= end_time * (1.0_wp - 1.0e-12_wp) .or. step >= cfg%run%max_steps
-      if (mod(step, int(cfg%output%stats_interval, i8)) == 0 .or. finished) call write_sample(output, time, pair, loads)
-      if (mod(step, int(cfg%run%progress_interval, i8)) == 0 .or. finished) &
-        call progress_line(step, time, dt, end_time, pair, wall_time() - wall_start)
       call evaluate_loads(models, pair, loads)
+      max_vdw_force = max(max_vdw_force, abs(loads%vdw_force))
+      if (mod(step, int(cfg%output%stats_interval, i8)) == 0 .or. finished) call write_sample(output, time, pair, loads)
+      if (step > 0 .and. (mod(step, int(cfg%run%progress_interval, i8)) == 0 .or. finished)) &
+        call progress_line(step, time, dt, end_time, pair, wall_time() - wall_start)
+      if (finished) exit
+      call advance(models, pair, loads, dt)
+      time = time + dt
+      step = step + 1
+      finished = time >= end_time * (1.0_wp - 1.0e-12_wp) .or. step >= cfg%run%max_steps
     end do
     call particle_output_close(output)
 
@@ -233,10 +234,12 @@ contains
     call log_line(trim(line))
   end subroutine progress_line
 
-  !> The outcome (docs/theory.md, "Run outcome"): agglomerated when the pair is bound in the DLVO
-  !> well at the end — the kinetic energy of the normal relative motion of the closest points (with
-  !> the reduced mass) is below the energy needed to escape from the current gap at the current
-  !> chi_eta; otherwise rebounded if it collided, no_contact if it never did.
+  !> The outcome (docs/theory.md, "Run outcome"): agglomerated when the pair has touched (at least
+  !> one collision) and is bound in the DLVO well at the end — the kinetic energy of the normal
+  !> relative motion of the closest points (with the reduced mass) is below the energy needed to
+  !> escape from the current gap at the current chi_eta; otherwise rebounded if it collided,
+  !> no_contact if it never did (a pair slowed to rest micrometres apart by Stokes drag is not an
+  !> agglomerate, even though it has no kinetic energy left).
   subroutine finish_summary(cfg, models, pair, loads, time, step, max_vdw_force, wall, summary)
     type(agglo_config_t), intent(in) :: cfg
     type(pair_models_t), intent(in) :: models
@@ -247,7 +250,7 @@ contains
     type(run_summary_t), intent(inout) :: summary
     logical :: bound
     bound = .false.
-    if (models%dlvo) bound = relative_normal_energy(pair%body(1), pair%body(2), pair%contact) &
+    if (models%dlvo .and. summary%collisions > 0) bound = relative_normal_energy(pair%body(1), pair%body(2), pair%contact) &
                              < escape_energy(models%dlvo_model, pair%contact%gap, loads%chi_eta)
     if (bound) then
       summary%outcome = 'agglomerated'
