@@ -47,8 +47,7 @@ contains
     angle2 = cfg%angle2; approach = cfg%approach; approach_direction = cfg%approach_direction
     gap = cfg%gap; relative_speed = cfg%relative_speed; centre = cfg%centre
     centre_position = cfg%centre_position; box_length = cfg%box_length
-    mirror_first_collision = cfg%mirror_first_collision
-    integrator = cfg%integrator
+    mirror_first_collision = cfg%mirror_first_collision; integrator = cfg%integrator
   end subroutine to_namelist
 
   subroutine from_namelist(cfg)
@@ -58,8 +57,7 @@ contains
     cfg%angle2 = angle2; cfg%approach = approach; cfg%approach_direction = approach_direction
     cfg%gap = gap; cfg%relative_speed = relative_speed; cfg%centre = centre
     cfg%centre_position = centre_position; cfg%box_length = box_length
-    cfg%mirror_first_collision = mirror_first_collision
-    cfg%integrator = integrator
+    cfg%mirror_first_collision = mirror_first_collision; cfg%integrator = integrator
   end subroutine from_namelist
 
   subroutine read_pair_group(deck, cfg)
@@ -97,7 +95,7 @@ contains
         real_text(cfg%relative_speed), '>= 0')
     call require_option('pair', 'centre', cfg%centre, [character(len=8) :: 'given', 'random'])
     call require_positive('pair', 'box_length', cfg%box_length)
-    call require_option('pair', 'integrator', cfg%integrator, [character(len=16) :: 'euler', 'verlet'])
+    call require_option('pair', 'integrator', cfg%integrator, [character(len=8) :: 'euler', 'verlet'])
   end subroutine check_pair_group
 
   subroutine write_pair_group(unit, cfg)
