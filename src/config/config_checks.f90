@@ -29,6 +29,9 @@ contains
     if (cfg%scene%fluid /= 'resolved' .and. cfg%scene%particles == 'none') call input_error('scene', &
         'particles', '''none'' with fluid = '''//trim(cfg%scene%fluid)//'''', &
         '''pair'' (a fluid-free or Stokes scene has nothing to compute without particles)')
+    if (cfg%scene%fluid /= 'resolved' .and. cfg%run%dt_mode /= 'fixed') call input_error('run', 'dt_mode', &
+        ''''//trim(cfg%run%dt_mode)//''' with fluid = '''//trim(cfg%scene%fluid)//'''', &
+        '''fixed'' (the CFL number is a property of the resolved fluid)')
   end subroutine check_scene_combinations
 
   !> Resolved fluid: the grid must split into equal slabs along z and y (pencil transposes of the FFT).
