@@ -6,14 +6,9 @@ set -eu
 cd "$(dirname "$0")/.."
 BUILD=${BUILD:-build}
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
-make --no-print-directory -s build
-# Same flags as `make build` in release mode (Makefile MODE=release).
-HDF5_LIB=/usr/lib/$(gcc -print-multiarch)/hdf5/openmpi
-mpifort -fwrapv -fimplicit-none -ffree-line-length-132 -O3 -march=native -funroll-loops -I"$BUILD/mod" \
-  -I/usr/include -I/usr/include/hdf5/openmpi -o "$BUILD/bench_fluid" tools/bench/bench_fluid.f90 \
-  "$BUILD/libagglo.a" -L"$HDF5_LIB" -Wl,-rpath,"$HDF5_LIB" -lhdf5_fortran -lhdf5 -lfftw3_mpi -lfftw3 -lHYPRE -llapack -lblas
+make --no-print-directory -s build "$BUILD/bench/bench_fluid"
 work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
-exe=$PWD/$BUILD/bench_fluid
+exe=$PWD/$BUILD/bench/bench_fluid
 echo "Agglo fluid benchmark on $(nproc) cores: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')"
 echo "compiler: $(mpifort --version | head -n 1); flags: -O3 -march=native -funroll-loops; FFTW_ESTIMATE plans"
 echo "    N  R  fft_pair   poisson      step  adv+diff  proj(P)      halo   io(4f)   [ms, medians]  ns/pt/step  poisson/fft"
