@@ -59,6 +59,11 @@ def write_run(directory, seed, shape="needle", outcome=None, fluid="none", name=
             outcome = "rebounded"
     os.makedirs(directory, exist_ok=True)
     name = name or os.path.basename(os.path.normpath(directory))
+    if not os.path.exists(os.path.join(directory, "run.nml")):
+        with open(os.path.join(directory, "run.nml"), "w") as handle:
+            handle.write(f"&run name = '{name}', seed = {seed} /\n&scene fluid = '{fluid}' /\n")
+        with open(os.path.join(directory, "agglo.log"), "w") as handle:
+            handle.write(f"fake pair scene: {name}\n")
     time_axis, gap, velocity, contact_time, speed = _history(rng, outcome, end_time, rows)
     theta = rng.uniform(0.0, math.pi, 2)
     phi = rng.uniform(-math.pi, math.pi, 2)
