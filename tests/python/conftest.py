@@ -66,6 +66,23 @@ def pair_deck():
     return str((needles or candidates)[0])
 
 
+@pytest.fixture(scope="session")
+def pair_scene(agglo, pair_deck, tmp_path_factory):
+    """$AGGLO and the pair deck, once checked to complete one run of the pair scene (summary.json):
+    the tests of real batches need the pair scene of the particle work."""
+    directory = tmp_path_factory.mktemp("pair scene probe")
+    deck = directory / "probe.nml"
+    deck.write_text(Path(pair_deck).read_text() + "\n")
+    result = run_tool([MONTECARLO, "--deck", deck, "--runs", "1", "--seed", "1", "--out",
+                       directory / "batch", "--agglo", agglo, "--set", "run.end_time=1.0e-4"], cwd=REPO)
+    if not (directory / "batch" / "run_0001" / "summary.json").exists():
+        log = (directory / "batch" / "run_0001" / "stdout.log")
+        tail = " | ".join(log.read_text().splitlines()[-3:]) if log.exists() else result.stderr
+        pytest.fail(f"$AGGLO did not complete one pair-scene run of {pair_deck} (no summary.json; "
+                    f"is the pair scene built?): {tail}")
+    return agglo, pair_deck
+
+
 @pytest.fixture
 def spaced_tmp(tmp_path):
     """A temporary directory whose path contains spaces (the tools must cope with them)."""
