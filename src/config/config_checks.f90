@@ -3,7 +3,7 @@
 module config_checks
   use agglo_kinds, only: wp
   use agglo_config, only: agglo_config_t
-  use deck_file, only: int_text
+  use deck_file, only: int_text, real_text
   use error_handling, only: input_error, fatal
   implicit none
   private
@@ -47,9 +47,18 @@ contains
         ''' with fluid = '''//trim(cfg%scene%fluid)//'''', '''none'' unless fluid = ''resolved''')
   end subroutine check_forcing_cross
 
+  !> Particle models: the nanometre-scale lengths must be far below the particle size (the DLVO and
+  !> collision models are surface-gap models in the Derjaguin limit, h << r).
   subroutine check_particle_cross(cfg)
     type(agglo_config_t), intent(in) :: cfg
-    real(wp) :: unused
-    unused = cfg%pair%radius
+    if (cfg%scene%dlvo) then
+      if (.not. (cfg%dlvo%vdw_cutoff < 0.01_wp * cfg%pair%radius)) call input_error('dlvo', 'vdw_cutoff', &
+          real_text(cfg%dlvo%vdw_cutoff), '< 0.01 * &pair radius = '//real_text(0.01_wp * cfg%pair%radius)//' m')
+    end if
+    if (cfg%scene%collisions) then
+      if (.not. (cfg%collision%detection_floor < 0.01_wp * cfg%pair%radius)) call input_error('collision', &
+          'detection_floor', real_text(cfg%collision%detection_floor), &
+          '< 0.01 * &pair radius = '//real_text(0.01_wp * cfg%pair%radius)//' m')
+    end if
   end subroutine check_particle_cross
 end module config_checks
