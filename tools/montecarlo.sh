@@ -88,19 +88,23 @@ add_override() { # group variable value (later calls replace earlier values)
   if (( k >= 0 )); then override_values[k]=$3; else override_keys+=("$key"); override_values+=("$3"); fi
 }
 
-group_assignments() { # group -> " v1 = x, v2 = y " for the overrides of that group ('' if none)
+group_assignments() { # group [lines] -> " v1 = x, v2 = y " or, with "lines", "  v1 = x\n  v2 = y\n"
   local k text='' sep=' '
   for k in "${!override_keys[@]}"; do
     if [[ ${override_keys[k]%%.*} == "$1" ]]; then
-      text+="$sep${override_keys[k]#*.} = ${override_values[k]}"; sep=', '
+      if [[ ${2:-} == lines ]]; then
+        text+="  ${override_keys[k]#*.} = ${override_values[k]}"$'\n'
+      else
+        text+="$sep${override_keys[k]#*.} = ${override_values[k]}"; sep=', '
+      fi
     fi
   done
-  [[ -n $text ]] && text+=' '
+  [[ -n $text && ${2:-} != lines ]] && text+=' '
   printf '%s' "$text"
 }
 
 deck_rewrite() { # deck text
-  local s=$1 n=${#1} i=0 j c prev=$'\n' quote='' group='' ident
+  local s=$1 n=${#1} i=0 j c prev=$'\n' quote='' group='' ident group_start=0
   local inside=0 comment=0 dropping=0 seen=' '
   deck_out=''
   while (( i < n )); do
@@ -111,7 +115,8 @@ deck_rewrite() { # deck text
       prev=$c; i=$((i + 1)); continue
     fi
     if (( comment )); then                         # '!' comment up to the end of the line
-      if [[ $c == $'\n' ]]; then comment=0; deck_out+=$c; else (( dropping )) || deck_out+=$c; fi
+      [[ $c == $'\n' ]] && comment=0
+      (( dropping )) || deck_out+=$c
       prev=$c; i=$((i + 1)); continue
     fi
     case $c in
@@ -125,11 +130,20 @@ deck_rewrite() { # deck text
           while (( j < n )) && [[ ${s:j:1} == [A-Za-z0-9_] ]]; do j=$((j + 1)); done
           group=${s:i+1:j-i-1}; group=${group,,}
           seen+="$group "; inside=1
-          deck_out+=${s:i:j-i}; prev=${s:j-1:1}; i=$j; continue
+          deck_out+=${s:i:j-i}; group_start=${#deck_out}; prev=${s:j-1:1}; i=$j; continue
         fi ;;
       '/')
         if (( inside )); then                      # the group closes: new values go first
-          deck_out+=$(group_assignments "$group")/
+          if [[ -z $(group_assignments "$group") ]]; then
+            :
+          elif [[ ${deck_out:group_start} == *$'\n'* ]]; then   # a group over several lines:
+            while [[ ${deck_out: -1} == [[:blank:]] ]]; do deck_out=${deck_out%?}; done
+            [[ ${deck_out: -1} == $'\n' ]] || deck_out+=$'\n'
+            deck_out+=$(group_assignments "$group" lines)$'\n'   # one item a line
+          else
+            deck_out+=$(group_assignments "$group")
+          fi
+          deck_out+=/
           inside=0; dropping=0; prev=$c; i=$((i + 1)); continue
         fi ;;
       [A-Za-z])
@@ -151,7 +165,7 @@ deck_rewrite() { # deck text
           prev=${ident: -1}; i=$((i + ${#ident})); continue
         fi ;;
     esac
-    if (( dropping )); then [[ $c == $'\n' ]] && deck_out+=$c; else deck_out+=$c; fi
+    (( dropping )) || deck_out+=$c
     prev=$c; i=$((i + 1))
   done
   (( inside )) && return 1                         # unclosed group: let the caller say so
