@@ -218,7 +218,7 @@ def _pdf_line(axis, values, bins, label, log_bins=False, color=None, style="-"):
     values = np.asarray(values, dtype=float)
     values = values[np.isfinite(values)]
     if values.size == 0:
-        return
+        return False
     if log_bins:
         # Density per unit log10 of the quantity, drawn against the quantity on a log axis.
         density, edges = np.histogram(np.log10(values), bins=np.log10(bins), density=True)
@@ -226,6 +226,15 @@ def _pdf_line(axis, values, bins, label, log_bins=False, color=None, style="-"):
     else:
         density, edges = np.histogram(values, bins=bins, density=True)
     axis.stairs(density, edges, label=f"{label} (n = {values.size})", color=color, linestyle=style)
+    return True
+
+
+def _legend_or_note(axis, note="no data"):
+    """A legend when something was drawn, else a note in the middle of the empty axis."""
+    if axis.get_legend_handles_labels()[0]:
+        axis.legend(fontsize=7)
+    else:
+        axis.text(0.5, 0.5, note, transform=axis.transAxes, ha="center", va="center", color="0.4")
 
 
 def _log_bins(values, count=40):
@@ -273,7 +282,7 @@ def make_figures(runs, groups, directory, history_runs):
     axis.set_xlabel("surface separation h (m)")
     axis.set_ylabel("PDF of log10 h")
     axis.set_title("Surface separation over the runs' histories")
-    axis.legend(fontsize=8)
+    _legend_or_note(axis, "no particles.h5 histories")
     written += _save(figure, directory, "separation_pdf")
     plt.close(figure)
 
@@ -287,7 +296,7 @@ def make_figures(runs, groups, directory, history_runs):
     axis.set_xlabel("normal relative velocity of the closest points (mm/s, > 0 approaching)")
     axis.set_ylabel("PDF (s/mm)")
     axis.set_title("Relative velocity over the runs' histories")
-    axis.legend(fontsize=8)
+    _legend_or_note(axis, "no particles.h5 histories")
     written += _save(figure, directory, "relative_velocity_pdf")
     plt.close(figure)
 
@@ -304,7 +313,7 @@ def make_figures(runs, groups, directory, history_runs):
     axis.set_xlabel("maximum van der Waals force of a run (N)")
     axis.set_ylabel("PDF of log10 F")
     axis.set_title("Maximum van der Waals force")
-    axis.legend(fontsize=8)
+    _legend_or_note(axis, "no positive force")
     written += _save(figure, directory, "max_vdw_force_pdf")
     plt.close(figure)
 
@@ -321,7 +330,7 @@ def make_figures(runs, groups, directory, history_runs):
         axis.set_title(group)
         axis.set_xlabel("psi at the first collision (rad)")
         axis.set_xlim(0.0, 0.5 * math.pi)
-        axis.legend(fontsize=7)
+        _legend_or_note(axis, "no collision in this group")
     axes[0][0].set_ylabel("PDF (1/rad)")
     figure.suptitle("Angle between the symmetry axes at contact")
     written += _save(figure, directory, "psi_pdf")
@@ -343,7 +352,7 @@ def make_figures(runs, groups, directory, history_runs):
                 _pdf_line(axis, values, bins, outcome, color=colour, style=style)
             axis.set_xlabel(f"{angle} of the first collision point (rad), both particles")
             axis.set_ylabel(f"{group}: PDF (1/rad)")
-            axis.legend(fontsize=7)
+            _legend_or_note(axis, "no collision in this group")
     figure.suptitle("Collision points on the unrotated spheroid surfaces")
     figure.tight_layout()
     written += _save(figure, directory, "collision_points_pdf")
@@ -361,7 +370,7 @@ def make_figures(runs, groups, directory, history_runs):
         bottom.plot(time * 1e3, velocity * 1e3, color=f"C{k % 10}")
     top.set_yscale("symlog", linthresh=1.0e-9)
     top.set_ylabel("surface separation h (m)")
-    top.legend(fontsize=7)
+    _legend_or_note(top, "no particles.h5 in the chosen runs")
     bottom.set_ylabel("relative velocity (mm/s)")
     bottom.set_xlabel("time (ms)")
     top.set_title("Histories of chosen runs")
@@ -372,7 +381,7 @@ def make_figures(runs, groups, directory, history_runs):
 
 def choose_history_runs(runs, groups, requested):
     """The runs named by --history (run directories or names), else per group the first
-    agglomerated and the first rebounded run."""
+    agglomerated and the first rebounded run (the first run when the group has neither)."""
     if requested:
         chosen = []
         for wanted in requested:
@@ -385,10 +394,11 @@ def choose_history_runs(runs, groups, requested):
         return chosen
     chosen = []
     for group in groups:
-        for outcome in ("agglomerated", "rebounded"):
-            match = next((r for r in runs if r.group == group and r.summary["outcome"] == outcome), None)
-            if match is not None:
-                chosen.append(match)
+        members = [r for r in runs if r.group == group]
+        picked = [next((r for r in members if r.summary["outcome"] == outcome), None)
+                  for outcome in ("agglomerated", "rebounded")]
+        picked = [r for r in picked if r is not None] or members[:1]
+        chosen += picked
     return chosen
 
 

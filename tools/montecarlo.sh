@@ -276,6 +276,7 @@ deck_rewrite "$deck_text" || die "base deck '$deck': the last namelist group is 
 batch_deck_text=$deck_out
 
 if [[ -e $root && ! -d $root ]]; then die "output root '$root' exists and is not a directory"; fi
+if (( status_only )) && [[ ! -f $root/batch.conf ]]; then die "output root '$root' holds no batch (no batch.conf)"; fi
 if [[ -d $root && ! -f $root/batch.conf ]] && [[ -n $(ls -A "$root" 2>/dev/null) ]]; then
   die "output root '$root' is not empty and holds no batch (no batch.conf): choose a new or empty directory"
 fi

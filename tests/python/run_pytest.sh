@@ -11,8 +11,9 @@ if [ ! -x "$python" ]; then
 fi
 report=$(mktemp "${TMPDIR:-/tmp}/agglo-pytest.XXXXXX") || exit 1
 trap 'rm -f "$report"' EXIT
-output=$(cd "$repo" && AGGLO_PYTEST_REPORT=$report "$python" -m pytest -q -p no:cacheprovider \
-           "$here" "$@" 2>&1)
+# Arguments (test files, -k expressions) replace the default: the whole of tests/python.
+[ "$#" -gt 0 ] || set -- "$here"
+output=$(cd "$repo" && AGGLO_PYTEST_REPORT=$report "$python" -m pytest -q -p no:cacheprovider "$@" 2>&1)
 status=$?
 cat "$report"
 if [ "$status" -ne 0 ] && ! grep -q '^FAIL ' "$report"; then

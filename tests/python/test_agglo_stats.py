@@ -131,3 +131,15 @@ def test_partial_batch_reports_the_skipped_runs(spaced_tmp):
     assert "run_0002: incomplete (no summary.json)" in result.stdout
     assert "run_0003: failed" in result.stdout and "run_0005: summary.json unreadable" in result.stdout
     assert len(read_csv(spaced_tmp / "stats" / "runs.csv")) == 2
+
+
+def test_batch_without_any_contact_still_gives_rates_and_figures(spaced_tmp):
+    # The quiescent protocol at 'stokes' fidelity never touches (physics.md section 7): 0 of n,
+    # whose Wilson interval is [0, z^2/(n + z^2)] = [0, 0.56150] for n = 3.
+    make_fake_batch(str(spaced_tmp), {"disk": (0, 0, 3)}, fluid="stokes")
+    result = run_tool([AGGLO_STATS, spaced_tmp])
+    assert result.returncode == 0, result.stderr
+    assert result.stderr == ""                      # no plotting warnings about empty panels
+    assert "[0.000, 0.561]" in result.stdout
+    for stem in FIGURES:
+        assert (spaced_tmp / "stats" / f"{stem}.png").stat().st_size > 5000, stem
