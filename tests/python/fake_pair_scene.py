@@ -3,22 +3,15 @@
 It writes a run directory exactly in the layout of "Per-run outputs of the pair scenes"
 (run.nml, agglo.log, particles.h5, summary.json; docs/tools.md lists the fields) with made-up but
 self-consistent histories: a straight approach, a first collision, then either a bound pair or a
-rebound. The statistics tests use it to build batches whose outcomes are known exactly (Wilson
-interval, CSV, figures), without depending on the physics of the real code. Every test of
-tools/montecarlo.sh on real runs uses $AGGLO instead.
+rebound. The statistics tests (test_agglo_stats.py) use it to build batches whose outcomes are
+known exactly (counts, Wilson interval, CSV, figures), independent of the real code's physics.
+Every test of tools/montecarlo.sh and of statistics on real runs uses $AGGLO instead.
 
-Library use: write_run(directory, seed=..., shape=..., outcome=...).
-Command line (as the executable would be called): fake_pair_scene.py DECK.nml
-  reads &run name, seed, end_time, dt, overwrite; &output directory; &scene fluid; &pair shape
-  (an extra variable only the fake knows), refuses like the code does (existing run without
-  overwrite, seed outside 32 bits), and sleeps FAKE_PAIR_SCENE_SECONDS (env) while "running".
+Use: write_run(directory, seed=..., shape=..., outcome=...).
 """
 import json
 import math
 import os
-import re
-import sys
-import time
 
 import h5py
 import numpy as np
@@ -120,60 +113,3 @@ def write_run(directory, seed, shape="needle", outcome=None, fluid="none", name=
         json.dump(summary, handle)
     os.replace(os.path.join(directory, "summary.json.tmp"), os.path.join(directory, "summary.json"))
     return summary
-
-
-def _deck_values(text):
-    """{(group, variable): value text} of a namelist deck (enough for the fake's own decks)."""
-    values = {}
-    for match in re.finditer(r"&(\w+)(.*?)(?<!['\"\w])/", _strip_comments(text), re.S):
-        group = match.group(1).lower()
-        for item in re.finditer(r"(\w+)\s*=\s*('[^']*'|\"[^\"]*\"|[^,\s/]+)", match.group(2)):
-            values[(group, item.group(1).lower())] = item.group(2).strip("'\"")
-    return values
-
-
-def _strip_comments(text):
-    lines = []
-    for line in text.splitlines():
-        quote, cut = None, len(line)
-        for i, char in enumerate(line):
-            if quote:
-                quote = None if char == quote else quote
-            elif char in "'\"":
-                quote = char
-            elif char == "!":
-                cut = i
-                break
-        lines.append(line[:cut])
-    return "\n".join(lines)
-
-
-def main(argv):
-    if len(argv) != 2:
-        sys.exit("usage: fake_pair_scene.py DECK.nml")
-    with open(argv[1]) as handle:
-        deck = _deck_values(handle.read())
-    name = deck.get(("run", "name"), "agglo")
-    seed = int(deck.get(("run", "seed"), "20250224"))
-    if not -2**31 <= seed < 2**31:
-        sys.stderr.write("agglo: error: deck: cannot read namelist group &run: Integer overflow\n")
-        sys.exit(2)
-    directory = deck.get(("output", "directory"), "") or os.path.join("output", name)
-    overwrite = deck.get(("run", "overwrite"), ".false.").lower() in (".true.", "t", "true")
-    if os.path.exists(os.path.join(directory, "run.nml")) and not overwrite:
-        sys.stderr.write(f"agglo: error: deck: &output directory = '{directory}' holds a run\n")
-        sys.exit(2)
-    os.makedirs(directory, exist_ok=True)
-    with open(argv[1]) as source, open(os.path.join(directory, "run.nml"), "w") as target:
-        target.write(source.read())
-    with open(os.path.join(directory, "agglo.log"), "w") as log:
-        log.write(f"fake pair scene: {name}\n")
-    time.sleep(float(os.environ.get("FAKE_PAIR_SCENE_SECONDS", "0")))
-    end_time = float(deck.get(("run", "end_time"), "1e-2").replace("d", "e"))
-    write_run(directory, seed, shape=deck.get(("pair", "shape"), "needle"),
-              fluid=deck.get(("scene", "fluid"), "none"), name=name, end_time=end_time)
-    print(f"agglo: run complete; outputs in {directory}/")
-
-
-if __name__ == "__main__":
-    main(sys.argv)
