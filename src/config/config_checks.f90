@@ -32,6 +32,9 @@ contains
     if (cfg%scene%fluid /= 'resolved' .and. cfg%run%dt_mode /= 'fixed') call input_error('run', 'dt_mode', &
         ''''//trim(cfg%run%dt_mode)//''' with fluid = '''//trim(cfg%scene%fluid)//'''', &
         '''fixed'' (the CFL number is a property of the resolved fluid)')
+    if (cfg%scene%fluid /= 'resolved' .and. cfg%run%restart) call input_error('run', 'restart', &
+        '.true. with fluid = '''//trim(cfg%scene%fluid)//'''', &
+        '.false. (pair scenes run in about a second and write no checkpoints: run them again)')
   end subroutine check_scene_combinations
 
   !> Resolved fluid: the grid must split into equal slabs along z and y (pencil transposes of the FFT).
