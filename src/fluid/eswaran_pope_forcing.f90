@@ -30,9 +30,10 @@ module eswaran_pope_forcing
   use deck_file, only: real_text, int_text
   use logger, only: log_line
   use parallel_env, only: global_sum
+  use fluid_grid, only: fluid_grid_t
   implicit none
   private
-  public :: ep_forcing_t, forcing_init, forcing_advance, forcing_add_to, forcing_set_field, &
+  public :: ep_forcing_t, forcing_init, forcing_init_on_grid, forcing_advance, forcing_add_to, forcing_set_field, &
             forcing_power_input, forcing_state_size, forcing_pack_state, forcing_unpack_state, &
             forcing_mode_extent, forcing_mode_is_forced, ep_power_estimate, epsilon_star_for_dissipation, &
             forcing_pair_count, forcing_mode_integers, forcing_wavevectors, forcing_coefficients, &
@@ -225,6 +226,16 @@ contains
     call log_line('forcing: E&P power estimate '//real_text(power_estimate)//' m^2/s^3 (T_L* = '// &
         real_text(time_scale_star)//'); white-noise limit 4 N_F epsilon* = '//real_text(power_limit)//' m^2/s^3')
   end subroutine forcing_init
+
+  !> forcing_init on the fluid's grid and slab.
+  subroutine forcing_init_on_grid(self, cfg, seed, grid)
+    type(ep_forcing_t), intent(out) :: self
+    type(forcing_config_t), intent(in) :: cfg
+    integer, intent(in) :: seed
+    type(fluid_grid_t), intent(in) :: grid
+    call forcing_init(self, cfg, seed, [grid%nx, grid%ny, grid%nz], [grid%lx, grid%ly, grid%lz], &
+                      grid%nz_local, grid%z_offset)
+  end subroutine forcing_init_on_grid
 
   pure logical function in_half_set(n)
     integer, intent(in) :: n(3)
