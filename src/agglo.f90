@@ -7,6 +7,7 @@ program agglo
   use parallel_env, only: parallel_start, parallel_stop, n_ranks
   use run_directory, only: prepare_run_directory, run_file
   use run_header, only: log_run_header
+  use hdf5_io, only: hdf5_io_finalize
   use resolved_scene, only: run_resolved_scene
   use pair_scene, only: run_pair_scene
   implicit none
@@ -31,5 +32,6 @@ program agglo
 
   call log_line('agglo: run complete; outputs in '//run_file(''))
   call log_close()
+  call hdf5_io_finalize()
   call parallel_stop()
 end program agglo

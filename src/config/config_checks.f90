@@ -4,7 +4,7 @@ module config_checks
   use agglo_kinds, only: wp
   use agglo_config, only: agglo_config_t
   use deck_file, only: int_text, real_text
-  use eswaran_pope_forcing, only: forcing_mode_extent
+  use config_forcing, only: forcing_mode_extent
   use error_handling, only: input_error, fatal
   implicit none
   private
@@ -40,7 +40,42 @@ contains
         'a multiple of the number of MPI ranks ('//int_text(nranks)//')')
     if (mod(cfg%grid%ny, nranks) /= 0) call input_error('grid', 'ny', int_text(cfg%grid%ny), &
         'a multiple of the number of MPI ranks ('//int_text(nranks)//')')
+    call check_fluid_time_step(cfg)
   end subroutine check_fluid_cross
+
+  !> A fixed dt must be below the stability limits the initial field lets us estimate:
+  !>  - explicit diffusion (AB2, 7-point Laplacian): dt <= 1 / (4 nu (1/dx^2 + 1/dy^2 + 1/dz^2))
+  !>    (the same bound as time_step_control's explicit_viscous_limit; config cannot use fluid/);
+  !>  - advection: dt (Ux/dx + Uy/dy + Uz/dz) <= cfl_limit with the peak velocity estimated from
+  !>    the initial amplitude U: Taylor-Green peaks are exactly (U, U lx/ly, 0); a random field's
+  !>    peak is taken as 3 U per component (about the 99.9th percentile of a Gaussian component).
+  !> With dt_mode = 'cfl' dt is only the largest step and the run adapts it, so only explicit
+  !> diffusion is checked there (the run applies cfl_target times that bound too).
+  subroutine check_fluid_time_step(cfg)
+    type(agglo_config_t), intent(in) :: cfg
+    real(wp) :: dx, dy, dz, viscous_limit, peak(3), advective_limit
+    dx = cfg%grid%length_x / cfg%grid%nx; dy = cfg%grid%length_y / cfg%grid%ny; dz = cfg%grid%length_z / cfg%grid%nz
+    if (cfg%fluid%viscous_scheme == 'explicit' .and. cfg%run%dt_mode == 'fixed') then
+      viscous_limit = 1.0_wp / (4.0_wp * cfg%fluid%viscosity * (1.0_wp / dx**2 + 1.0_wp / dy**2 + 1.0_wp / dz**2))
+      if (cfg%run%dt > viscous_limit) call input_error('run', 'dt', real_text(cfg%run%dt), &
+          '<= '//real_text(viscous_limit)//' s, the stability limit of explicit diffusion on this grid '// &
+          '(or set &fluid viscous_scheme = ''crank_nicolson'', or dt_mode = ''cfl'')')
+    end if
+    if (cfg%run%dt_mode /= 'fixed') return
+    select case (trim(cfg%fluid%init))
+    case ('taylor_green')
+      peak = cfg%fluid%init_amplitude * [1.0_wp, cfg%grid%length_y / cfg%grid%length_x, 0.0_wp]
+    case ('random')
+      peak = 3.0_wp * cfg%fluid%init_amplitude
+    case default
+      return   ! rest: nothing to estimate; file: checked at run time by the CFL monitor
+    end select
+    if (all(peak == 0.0_wp)) return
+    advective_limit = cfg%run%cfl_limit / (peak(1) / dx + peak(2) / dy + peak(3) / dz)
+    if (cfg%run%dt > advective_limit) call input_error('run', 'dt', real_text(cfg%run%dt), &
+        '<= '//real_text(advective_limit)//' s, the advective limit cfl_limit / (Ux/dx + Uy/dy + Uz/dz) '// &
+        'for the estimated peak velocity of the initial field (or set dt_mode = ''cfl'')')
+  end subroutine check_fluid_time_step
 
   !> Forcing: only of a resolved fluid; the forced modes must be representable on the grid; the
   !> Euler-Maruyama form (paper Eq. 3) needs dt <= T_L (its decay factor 1 - dt/T_L turns negative).

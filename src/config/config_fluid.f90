@@ -2,6 +2,7 @@
 module config_fluid
   use agglo_kinds, only: wp
   use deck_file, only: deck_t, check_namelist_read, require_positive, require_nonnegative, require_option
+  use error_handling, only: input_error
   implicit none
   private
   public :: fluid_config_t, read_fluid_group, check_fluid_group, write_fluid_group
@@ -14,12 +15,14 @@ module config_fluid
     character(len=256) :: init_file = ''           !< field file for init = 'file'
     real(wp) :: init_amplitude = 1.0e-3_wp         !< m/s, velocity scale of 'taylor_green' / rms of 'random'
     real(wp) :: init_peak_wavenumber = 2.0_wp      !< spectrum peak of 'random', in units of 2 pi / length_x
+    character(len=16) :: fft_planning = 'estimate' !< 'estimate' (reproducible) | 'measure' (faster plans, not bit-reproducible)
   end type fluid_config_t
 
   real(wp) :: density, viscosity, init_amplitude, init_peak_wavenumber
-  character(len=16) :: viscous_scheme, init
+  character(len=16) :: viscous_scheme, init, fft_planning
   character(len=256) :: init_file
-  namelist /fluid/ density, viscosity, viscous_scheme, init, init_file, init_amplitude, init_peak_wavenumber
+  namelist /fluid/ density, viscosity, viscous_scheme, init, init_file, init_amplitude, init_peak_wavenumber, &
+                  fft_planning
 
 contains
 
@@ -27,14 +30,14 @@ contains
     type(fluid_config_t), intent(in) :: cfg
     density = cfg%density; viscosity = cfg%viscosity; viscous_scheme = cfg%viscous_scheme
     init = cfg%init; init_file = cfg%init_file; init_amplitude = cfg%init_amplitude
-    init_peak_wavenumber = cfg%init_peak_wavenumber
+    init_peak_wavenumber = cfg%init_peak_wavenumber; fft_planning = cfg%fft_planning
   end subroutine to_namelist
 
   subroutine from_namelist(cfg)
     type(fluid_config_t), intent(inout) :: cfg
     cfg%density = density; cfg%viscosity = viscosity; cfg%viscous_scheme = viscous_scheme
     cfg%init = init; cfg%init_file = init_file; cfg%init_amplitude = init_amplitude
-    cfg%init_peak_wavenumber = init_peak_wavenumber
+    cfg%init_peak_wavenumber = init_peak_wavenumber; cfg%fft_planning = fft_planning
   end subroutine from_namelist
 
   subroutine read_fluid_group(deck, cfg)
@@ -56,6 +59,9 @@ contains
     call require_option('fluid', 'init', cfg%init, [character(len=16) :: 'rest', 'taylor_green', 'random', 'file'])
     call require_nonnegative('fluid', 'init_amplitude', cfg%init_amplitude)
     call require_positive('fluid', 'init_peak_wavenumber', cfg%init_peak_wavenumber)
+    call require_option('fluid', 'fft_planning', cfg%fft_planning, [character(len=16) :: 'estimate', 'measure'])
+    if (cfg%init == 'file' .and. len_trim(cfg%init_file) == 0) call input_error('fluid', 'init_file', &
+        '''''', 'the path of an Agglo field snapshot or checkpoint (needed by init = ''file'')')
   end subroutine check_fluid_group
 
   subroutine write_fluid_group(unit, cfg)

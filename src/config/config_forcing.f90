@@ -15,11 +15,15 @@ module config_forcing
   implicit none
   private
   public :: forcing_config_t, read_forcing_group, check_forcing_group, write_forcing_group, &
-            forcing_unset, forcing_is_set, forcing_strength_input
+            forcing_unset, forcing_is_set, forcing_strength_input, forcing_mode_extent, cutoff_slack
 
   !> Marks a strength input the deck did not give (a value nobody types; it survives a round trip
   !> through the resolved deck run.nml, so that deck reads back to the same configuration).
   real(wp), parameter :: forcing_unset = -huge(1.0_wp)
+
+  !> Relative slack on |k| <= kappa_F so that a cut-off typed as e.g. sqrt(5) = 2.2360679775
+  !> still includes the |n|^2 = 5 shell despite decimal rounding.
+  real(wp), parameter :: cutoff_slack = 1.0e-10_wp
 
   type :: forcing_config_t
     real(wp) :: time_scale = 0.01_wp                 !< s, T_L of the Ornstein-Uhlenbeck processes
@@ -58,6 +62,13 @@ contains
     call check_namelist_read('forcing', ios, message)
     call from_namelist(cfg)
   end subroutine read_forcing_group
+
+  !> Largest |n_d| of a forced mode along each axis: k_d = 2 pi n_d / L_d <= kappa_F = ratio 2 pi / L_max.
+  pure function forcing_mode_extent(kappa_f_ratio, lengths) result(extent)
+    real(wp), intent(in) :: kappa_f_ratio, lengths(3)
+    integer :: extent(3)
+    extent = floor(kappa_f_ratio * (lengths / maxval(lengths)) * (1.0_wp + cutoff_slack))
+  end function forcing_mode_extent
 
   pure logical function forcing_is_set(value)
     real(wp), intent(in) :: value

@@ -1,28 +1,61 @@
-!> Namelist group &pair: the particle pair set-up of the paper's protocol (stub: extended by the particle work).
+!> Namelist group &pair: the two-particle set-up of the paper's protocol (design.md).
+!> Both particles have the same shape; the pair is placed with an exact surface gap along its
+!> closest-approach vector and each particle moves towards the other at relative_speed / 2.
 module config_pair
   use agglo_kinds, only: wp
-  use deck_file, only: deck_t, check_namelist_read, require_positive
+  use deck_file, only: deck_t, check_namelist_read, require_positive, require_option, real_text
+  use error_handling, only: input_error
   implicit none
   private
   public :: pair_config_t, read_pair_group, check_pair_group, write_pair_group
 
   type :: pair_config_t
-    real(wp) :: radius = 50.0e-6_wp   !< m, volume-equivalent radius
+    character(len=16) :: shape = 'disk'           !< 'sphere' | 'needle' | 'disk' | 'spheroid'
+    real(wp) :: aspect_ratio = 5.0_wp             !< needle a/b, disk b/a (both >= 1); 'spheroid': a/b
+    real(wp) :: radius = 50.0e-6_wp               !< m, volume-equivalent radius r (a b^2 = r^3)
+    real(wp) :: density = 2710.0_wp               !< kg/m^3, calcite (paper, Table 1)
+    character(len=16) :: orientation = 'random'   !< 'random' (uniform, from &run seed) | 'given'
+    real(wp) :: axis1(3) = [0.0_wp, 0.0_wp, 1.0_wp]   !< rotation axis of particle 1 ('given')
+    real(wp) :: angle1 = 0.0_wp                   !< rad, rotation angle of particle 1 ('given')
+    real(wp) :: axis2(3) = [0.0_wp, 0.0_wp, 1.0_wp]
+    real(wp) :: angle2 = 0.0_wp
+    character(len=16) :: approach = 'random'      !< direction from 1 to 2 before gap placement: 'random' | 'given'
+    real(wp) :: approach_direction(3) = [1.0_wp, 0.0_wp, 0.0_wp]
+    real(wp) :: gap = 5.0e-6_wp                   !< m, initial surface gap along the closest-approach vector
+    real(wp) :: relative_speed = 0.875e-3_wp      !< m/s, initial approach speed (each particle +-v/2)
+    character(len=16) :: centre = 'given'         !< pair centre: 'given' | 'random' (uniform in the box)
+    real(wp) :: centre_position(3) = [0.5e-3_wp, 0.5e-3_wp, 0.5e-3_wp]  !< m
+    real(wp) :: box_length = 1.0e-3_wp            !< m, box for centre = 'random'
+    logical :: mirror_first_collision = .true.    !< end at twice the first-collision time (paper)
   end type pair_config_t
 
-  real(wp) :: radius
-  namelist /pair/ radius
+  character(len=16) :: shape, orientation, approach, centre
+  real(wp) :: aspect_ratio, radius, density, axis1(3), angle1, axis2(3), angle2, approach_direction(3), &
+              gap, relative_speed, centre_position(3), box_length
+  logical :: mirror_first_collision
+  namelist /pair/ shape, aspect_ratio, radius, density, orientation, axis1, angle1, axis2, angle2, approach, &
+                  approach_direction, gap, relative_speed, centre, centre_position, box_length, mirror_first_collision
 
 contains
 
   subroutine to_namelist(cfg)
     type(pair_config_t), intent(in) :: cfg
-    radius = cfg%radius
+    shape = cfg%shape; aspect_ratio = cfg%aspect_ratio; radius = cfg%radius; density = cfg%density
+    orientation = cfg%orientation; axis1 = cfg%axis1; angle1 = cfg%angle1; axis2 = cfg%axis2
+    angle2 = cfg%angle2; approach = cfg%approach; approach_direction = cfg%approach_direction
+    gap = cfg%gap; relative_speed = cfg%relative_speed; centre = cfg%centre
+    centre_position = cfg%centre_position; box_length = cfg%box_length
+    mirror_first_collision = cfg%mirror_first_collision
   end subroutine to_namelist
 
   subroutine from_namelist(cfg)
     type(pair_config_t), intent(inout) :: cfg
-    cfg%radius = radius
+    cfg%shape = shape; cfg%aspect_ratio = aspect_ratio; cfg%radius = radius; cfg%density = density
+    cfg%orientation = orientation; cfg%axis1 = axis1; cfg%angle1 = angle1; cfg%axis2 = axis2
+    cfg%angle2 = angle2; cfg%approach = approach; cfg%approach_direction = approach_direction
+    cfg%gap = gap; cfg%relative_speed = relative_speed; cfg%centre = centre
+    cfg%centre_position = centre_position; cfg%box_length = box_length
+    cfg%mirror_first_collision = mirror_first_collision
   end subroutine from_namelist
 
   subroutine read_pair_group(deck, cfg)
@@ -38,7 +71,28 @@ contains
 
   subroutine check_pair_group(cfg)
     type(pair_config_t), intent(in) :: cfg
+    call require_option('pair', 'shape', cfg%shape, [character(len=8) :: 'sphere', 'needle', 'disk', 'spheroid'])
+    call require_positive('pair', 'aspect_ratio', cfg%aspect_ratio)
+    if ((cfg%shape == 'needle' .or. cfg%shape == 'disk') .and. cfg%aspect_ratio <= 1.0_wp) call input_error('pair', &
+        'aspect_ratio', real_text(cfg%aspect_ratio), '> 1 for shape = '''//trim(cfg%shape)// &
+        ''' (long over short semi-axis; use shape = ''spheroid'' for a/b on either side of 1)')
+    if (cfg%shape == 'spheroid' .and. (cfg%aspect_ratio < 0.01_wp .or. cfg%aspect_ratio > 100.0_wp)) &
+        call input_error('pair', 'aspect_ratio', real_text(cfg%aspect_ratio), '[0.01, 100] for shape = ''spheroid''')
     call require_positive('pair', 'radius', cfg%radius)
+    call require_positive('pair', 'density', cfg%density)
+    call require_option('pair', 'orientation', cfg%orientation, [character(len=8) :: 'random', 'given'])
+    if (cfg%orientation == 'given') then
+      if (norm2(cfg%axis1) == 0.0_wp) call input_error('pair', 'axis1', '(0, 0, 0)', 'a non-zero vector')
+      if (norm2(cfg%axis2) == 0.0_wp) call input_error('pair', 'axis2', '(0, 0, 0)', 'a non-zero vector')
+    end if
+    call require_option('pair', 'approach', cfg%approach, [character(len=8) :: 'random', 'given'])
+    if (cfg%approach == 'given' .and. norm2(cfg%approach_direction) == 0.0_wp) &
+        call input_error('pair', 'approach_direction', '(0, 0, 0)', 'a non-zero vector')
+    call require_positive('pair', 'gap', cfg%gap)
+    if (.not. (cfg%relative_speed >= 0.0_wp)) call input_error('pair', 'relative_speed', &
+        real_text(cfg%relative_speed), '>= 0')
+    call require_option('pair', 'centre', cfg%centre, [character(len=8) :: 'given', 'random'])
+    call require_positive('pair', 'box_length', cfg%box_length)
   end subroutine check_pair_group
 
   subroutine write_pair_group(unit, cfg)

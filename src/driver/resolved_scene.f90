@@ -1,7 +1,23 @@
 !> The resolved scene: DNS of the periodic box (fluid only until the immersed boundary lands).
+!> The loop follows design.md's data flow: time step -> momentum predictor + projection
+!> (fluid_advance) -> statistics, health check, output, checkpoint.
 module resolved_scene
+  use agglo_kinds, only: wp, i8
   use agglo_config, only: agglo_config_t
+  use error_handling, only: fatal
+  use deck_file, only: real_text
   use logger, only: log_line
+  use wall_clock, only: wall_time
+  use run_directory, only: run_file
+  use hdf5_io, only: hdf5_io_finalize
+  use checkpoint_files, only: newest_checkpoint
+  use physical_constants, only: two_pi
+  use fluid_solver, only: fluid_solver_t, fluid_solver_create, fluid_advance, timer_io
+  use initial_fields, only: set_rest, set_taylor_green, set_random_field
+  use fluid_diagnostics, only: fluid_statistics_t, compute_fluid_statistics, advective_rate
+  use time_step_control, only: next_time_step, explicit_viscous_limit
+  use fluid_restart, only: write_fluid_checkpoint, read_fluid_checkpoint, write_fluid_snapshot, read_initial_field
+  use fluid_monitor, only: statistics_open, statistics_write, statistics_close, progress_line, timing_report
   implicit none
   private
   public :: run_resolved_scene
@@ -10,6 +26,128 @@ contains
 
   subroutine run_resolved_scene(cfg)
     type(agglo_config_t), intent(in) :: cfg
-    call log_line('resolved scene: '//trim(cfg%run%name)//' (solver not built yet)')
+    type(fluid_solver_t) :: solver
+    type(fluid_statistics_t) :: stats
+    real(wp) :: dt, rate, viscous_limit, next_field_time, start_wall, step_wall, t0
+    integer(i8) :: first_step
+    logical :: finite
+
+    call start_fluid(cfg, solver)
+    viscous_limit = huge(1.0_wp)
+    if (.not. solver%crank_nicolson) viscous_limit = explicit_viscous_limit(solver%grid%dx, solver%grid%dy, &
+                                                                            solver%grid%dz, solver%viscosity)
+    call statistics_open(run_file('fluid_statistics.dat'), append=cfg%run%restart)
+    next_field_time = next_output_time(solver%time, cfg%output%field_interval, cfg%run%end_time)
+    if (.not. cfg%run%restart) then
+      call compute_fluid_statistics(solver, 0.0_wp, stats)
+      call statistics_write(solver%step, solver%time, 0.0_wp, stats)
+      call output_fields(solver)
+    end if
+    first_step = solver%step
+    start_wall = wall_time()
+    step_wall = start_wall
+
+    do while (solver%time < cfg%run%end_time .and. solver%step < cfg%run%max_steps)
+      call advective_rate(solver, rate, finite)
+      dt = next_time_step(cfg%run%dt_mode, cfg%run%dt, cfg%run%cfl_target, rate, viscous_limit, solver%time, &
+                          cfg%run%end_time)
+      call fluid_advance(solver, dt)
+
+      call advective_rate(solver, rate, finite)
+      if (.not. finite) call stop_run(solver, 'the velocity field is no longer finite (NaN or infinity) at step ')
+      if (dt * rate > cfg%run%cfl_limit) call stop_run(solver, 'CFL number '//real_text(dt * rate)// &
+          ' exceeds &run cfl_limit = '//real_text(cfg%run%cfl_limit)//' at step ')
+      if (mod(solver%step, int(cfg%output%stats_interval, i8)) == 0) then
+        call compute_fluid_statistics(solver, dt, stats)
+        call statistics_write(solver%step, solver%time, dt, stats)
+      end if
+      if (mod(solver%step, int(cfg%run%progress_interval, i8)) == 0) then
+        call progress_line(solver%step, solver%time, dt, (wall_time() - step_wall) / cfg%run%progress_interval, &
+            min(real(cfg%run%max_steps - solver%step, wp), (cfg%run%end_time - solver%time) / dt))
+        step_wall = wall_time()
+      end if
+      if (solver%time >= next_field_time * (1.0_wp - 1.0e-12_wp) .and. solver%time < cfg%run%end_time) then
+        call output_fields(solver)
+        next_field_time = next_output_time(solver%time, cfg%output%field_interval, cfg%run%end_time)
+      end if
+      if (cfg%output%checkpoint_interval > 0) then
+        if (mod(solver%step, int(cfg%output%checkpoint_interval, i8)) == 0) call checkpoint(solver)
+      end if
+    end do
+
+    call output_fields(solver)
+    if (cfg%output%checkpoint_interval == 0 .or. &
+        mod(solver%step, int(max(cfg%output%checkpoint_interval, 1), i8)) /= 0) call checkpoint(solver)
+    call statistics_close()
+    call timing_report(solver, solver%step - first_step, wall_time() - start_wall)
+    call log_line('resolved scene: '//trim(cfg%run%name)//' reached t = '//real_text(solver%time)//' s; '// &
+        'time series '//run_file('fluid_statistics.dat')//', fields '//run_file('fields.xdmf')// &
+        ', checkpoints '//run_file('checkpoints'))
+    call hdf5_io_finalize()
+
+  contains
+
+    subroutine output_fields(solver)
+      type(fluid_solver_t), intent(inout) :: solver
+      t0 = wall_time()
+      call write_fluid_snapshot(solver)
+      solver%timers(timer_io) = solver%timers(timer_io) + wall_time() - t0
+    end subroutine output_fields
+
+    subroutine checkpoint(solver)
+      type(fluid_solver_t), intent(inout) :: solver
+      t0 = wall_time()
+      call write_fluid_checkpoint(solver, cfg%output%checkpoints_kept)
+      solver%timers(timer_io) = solver%timers(timer_io) + wall_time() - t0
+    end subroutine checkpoint
+
+    !> A failed run still leaves its last field for a look in ParaView.
+    subroutine stop_run(solver, reason)
+      type(fluid_solver_t), intent(inout) :: solver
+      character(len=*), intent(in) :: reason
+      character(len=24) :: step_text
+      write(step_text, '(i0)') solver%step
+      call output_fields(solver)
+      call fatal('resolved scene: '//reason//trim(step_text)//' (t = '//real_text(solver%time)//' s); '// &
+          'the last field is in '//run_file('fields.xdmf')//'; reduce &run dt or cfl_target')
+    end subroutine stop_run
   end subroutine run_resolved_scene
+
+  !> Solver and initial state: the newest checkpoint on restart, else &fluid init.
+  subroutine start_fluid(cfg, solver)
+    type(agglo_config_t), intent(in) :: cfg
+    type(fluid_solver_t), intent(inout) :: solver
+    character(len=:), allocatable :: path
+    call fluid_solver_create(solver, cfg%grid%nx, cfg%grid%ny, cfg%grid%nz, cfg%grid%length_x, cfg%grid%length_y, &
+        cfg%grid%length_z, cfg%fluid%viscosity, cfg%fluid%density, cfg%fluid%viscous_scheme, cfg%fluid%fft_planning)
+    if (cfg%run%restart) then
+      path = newest_checkpoint()
+      if (len(path) == 0) call fatal('deck: &run restart = .true. but the run directory '//run_file('checkpoints')// &
+                                     ' holds no complete checkpoint to continue from')
+      call read_fluid_checkpoint(solver, path)
+      call log_line('resolved scene: continuing from '//path)
+      return
+    end if
+    select case (trim(cfg%fluid%init))
+    case ('rest')
+      call set_rest(solver)
+    case ('taylor_green')
+      call set_taylor_green(solver, cfg%fluid%init_amplitude)
+    case ('random')
+      call set_random_field(solver, int(cfg%run%seed, i8), cfg%fluid%init_amplitude, &
+                            cfg%fluid%init_peak_wavenumber * two_pi / cfg%grid%length_x)
+    case ('file')
+      call read_initial_field(solver, trim(cfg%fluid%init_file))
+    end select
+  end subroutine start_fluid
+
+  !> The first multiple of interval after time (interval 0: only the start and the end).
+  pure real(wp) function next_output_time(time, interval, end_time) result(next)
+    real(wp), intent(in) :: time, interval, end_time
+    if (interval > 0) then
+      next = (aint(time / interval * (1.0_wp + 1.0e-12_wp)) + 1.0_wp) * interval
+    else
+      next = 2 * end_time + 1.0_wp
+    end if
+  end function next_output_time
 end module resolved_scene

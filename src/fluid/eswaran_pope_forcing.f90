@@ -23,7 +23,7 @@ module eswaran_pope_forcing
   use, intrinsic :: iso_c_binding, only: c_double
   use agglo_kinds, only: wp, i8
   use physical_constants, only: two_pi
-  use config_forcing, only: forcing_config_t, forcing_is_set, forcing_strength_input
+  use config_forcing, only: forcing_config_t, forcing_strength_input, forcing_mode_extent, cutoff_slack
   use random_stream, only: random_stream_t, stream_seed, stream_normal, stream_pack, stream_unpack, &
                            stream_state_size
   use error_handling, only: fatal
@@ -42,9 +42,6 @@ module eswaran_pope_forcing
 
   integer, parameter :: forcing_stream_id = 2          !< interfaces.md: stream 2 = forcing
   integer, parameter :: update_exact = 1, update_euler_maruyama = 2
-  !> Relative slack on |k| <= kappa_F so that a cut-off typed as e.g. sqrt(5) = 2.2360679775
-  !> still includes the |n|^2 = 5 shell despite decimal rounding.
-  real(wp), parameter :: cutoff_slack = 1.0e-10_wp
   !> E&P (1988) finite-T_L estimate constant (physics.md section 3).
   real(wp), parameter :: ep_constant = 0.8_wp
   integer(i8), parameter :: state_format = 20250301_i8   !< first word of a packed state
@@ -87,13 +84,6 @@ module eswaran_pope_forcing
 contains
 
   ! ------------------------------------------------------------------ set-up
-
-  !> Largest |n_d| of a forced mode along each axis: k_d = 2 pi n_d / L_d <= kappa_F = ratio 2 pi / L_max.
-  pure function forcing_mode_extent(kappa_f_ratio, lengths) result(extent)
-    real(wp), intent(in) :: kappa_f_ratio, lengths(3)
-    integer :: extent(3)
-    extent = floor(kappa_f_ratio * (lengths / maxval(lengths)) * (1.0_wp + cutoff_slack))
-  end function forcing_mode_extent
 
   !> 0 < |k| <= kappa_F for the integer vector n (in units of kappa0 = 2 pi / L_max).
   pure logical function forcing_mode_is_forced(n, kappa_f_ratio, lengths)

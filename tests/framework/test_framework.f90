@@ -98,8 +98,9 @@ contains
 
   !> Print this program's tally, finalize MPI if it is running, exit 1 on any failure.
   subroutine test_finish()
-    logical :: up, down
+    logical :: up, down, root
     integer :: any_failed
+    root = on_root()
     call MPI_Initialized(up)
     call MPI_Finalized(down)
     any_failed = merge(1, 0, failed > 0)
@@ -107,7 +108,7 @@ contains
       call MPI_Allreduce(MPI_IN_PLACE, any_failed, 1, MPI_INTEGER, MPI_MAX, MPI_COMM_WORLD)
       call MPI_Finalize()
     end if
-    if (on_root()) write(output_unit, '(i0,a,i0,a)') passed, ' passed, ', failed, ' failed'
+    if (root) write(output_unit, '(i0,a,i0,a)') passed, ' passed, ', failed, ' failed'
     if (any_failed > 0) error stop 1
   end subroutine test_finish
 end module test_framework

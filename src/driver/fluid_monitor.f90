@@ -1,0 +1,88 @@
+!> What a resolved run tells its user while it runs: the fluid time series (fluid_statistics.dat),
+!> the progress line, and the per-step timing breakdown at the end.
+module fluid_monitor
+  use mpi_f08, only: MPI_Allreduce, MPI_IN_PLACE, MPI_SUM, MPI_MAX, MPI_MIN
+  use agglo_kinds, only: wp, i8
+  use logger, only: log_line
+  use parallel_env, only: is_root, world, mpi_wp, n_ranks
+  use wall_clock, only: format_duration
+  use fluid_diagnostics, only: fluid_statistics_t
+  use fluid_solver, only: fluid_solver_t, timer_count, timer_names
+  implicit none
+  private
+  public :: statistics_open, statistics_write, statistics_close, progress_line, timing_report
+
+  integer :: statistics_unit = -1
+
+contains
+
+  !> Rank 0 opens the time series; a restarted run appends to it.
+  subroutine statistics_open(path, append)
+    character(len=*), intent(in) :: path
+    logical, intent(in) :: append
+    logical :: exists
+    if (.not. is_root()) return
+    inquire(file=path, exist=exists)
+    if (append .and. exists) then
+      open(newunit=statistics_unit, file=path, status='old', position='append', action='write')
+    else
+      open(newunit=statistics_unit, file=path, status='replace', action='write')
+      write(statistics_unit, '(a)') '# Agglo fluid time series (volume averages per unit mass; docs/decks.md, &output)'
+      write(statistics_unit, '(a)') '# step  time[s]  dt[s]  kinetic_energy[m2/s2]  dissipation[m2/s3]  '// &
+                                    'max_divergence[1/s]  cfl'
+    end if
+  end subroutine statistics_open
+
+  subroutine statistics_write(step, time, dt, stats)
+    integer(i8), intent(in) :: step
+    real(wp), intent(in) :: time, dt
+    type(fluid_statistics_t), intent(in) :: stats
+    if (statistics_unit == -1) return
+    write(statistics_unit, '(i10,6es24.16)') step, time, dt, stats%kinetic_energy, stats%dissipation, &
+        stats%max_divergence, stats%cfl
+    flush(statistics_unit)
+  end subroutine statistics_write
+
+  subroutine statistics_close()
+    if (statistics_unit /= -1) close(statistics_unit)
+    statistics_unit = -1
+  end subroutine statistics_close
+
+  !> "step 120  t = 1.2000E-03 s  dt = 1.0000E-05 s  3.21 ms/step  ETA 12.0s"
+  subroutine progress_line(step, time, dt, seconds_per_step, steps_left)
+    integer(i8), intent(in) :: step
+    real(wp), intent(in) :: time, dt, seconds_per_step, steps_left
+    character(len=160) :: line
+    write(line, '(a,i0,a,es11.4,a,es11.4,a,f0.2,a)') 'step ', step, '  t = ', time, ' s  dt = ', dt, ' s  ', &
+        1.0e3_wp * seconds_per_step, ' ms/step  ETA '
+    call log_line(trim(line)//' '//trim(format_duration(seconds_per_step * steps_left)))
+  end subroutine progress_line
+
+  !> Seconds per step of each category: min / mean / max over the ranks.
+  subroutine timing_report(solver, steps, total_seconds)
+    type(fluid_solver_t), intent(in) :: solver
+    integer(i8), intent(in) :: steps
+    real(wp), intent(in) :: total_seconds
+    real(wp) :: smallest(timer_count + 1), mean(timer_count + 1), largest(timer_count + 1), mine(timer_count + 1)
+    character(len=160) :: line
+    integer :: c
+    if (steps <= 0) return
+    mine(1:timer_count) = solver%timers / steps
+    mine(timer_count + 1) = total_seconds / steps
+    smallest = mine; mean = mine; largest = mine
+    call MPI_Allreduce(MPI_IN_PLACE, smallest, timer_count + 1, mpi_wp, MPI_MIN, world)
+    call MPI_Allreduce(MPI_IN_PLACE, mean, timer_count + 1, mpi_wp, MPI_SUM, world)
+    call MPI_Allreduce(MPI_IN_PLACE, largest, timer_count + 1, mpi_wp, MPI_MAX, world)
+    mean = mean / n_ranks
+    call log_line('timing per step (ms; min / mean / max over ranks):')
+    do c = 1, timer_count + 1
+      if (c <= timer_count) then
+        write(line, '(2x,a24,3f10.3)') timer_names(c), 1.0e3_wp * smallest(c), 1.0e3_wp * mean(c), 1.0e3_wp * largest(c)
+      else
+        write(line, '(2x,a24,3f10.3)') 'whole step (incl. other)', 1.0e3_wp * smallest(c), 1.0e3_wp * mean(c), &
+            1.0e3_wp * largest(c)
+      end if
+      call log_line(trim(line))
+    end do
+  end subroutine timing_report
+end module fluid_monitor

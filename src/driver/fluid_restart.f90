@@ -1,0 +1,154 @@
+!> Fluid state in files: checkpoints (everything for a bit-for-bit continuation), field snapshots,
+!> and the initial field read from a file. Built on the io room's hdf5_io / checkpoint_files /
+!> field_output. All routines are collective.
+!>
+!> Checkpoint datasets (Fortran shapes): fluid/u, fluid/v, fluid/w, fluid/pressure,
+!> fluid/explicit_old_u|v|w (nx, ny, nz); fluid/grid_shape (3); fluid/time, fluid/dt_old (s);
+!> fluid/step (integer(i8)); fluid/has_history (0 | 1).
+module fluid_restart
+  use agglo_kinds, only: wp, i8
+  use error_handling, only: fatal
+  use deck_file, only: int_text
+  use hdf5_io, only: h5_file_t, h5_open, h5_close, h5_exists, h5_write_slab, h5_read_slab, h5_write_array, &
+                     h5_read_array
+  use checkpoint_files, only: checkpoint_begin, checkpoint_commit
+  use field_output, only: field_snapshot_t, field_snapshot_begin, field_snapshot_add, field_snapshot_end, &
+                          at_cell_centre, at_x_face, at_y_face, at_z_face
+  use fluid_solver, only: fluid_solver_t, fluid_exchange_velocity
+  implicit none
+  private
+  public :: write_fluid_checkpoint, read_fluid_checkpoint, write_fluid_snapshot, read_initial_field
+
+contains
+
+  subroutine write_fluid_checkpoint(solver, checkpoints_kept)
+    type(fluid_solver_t), intent(in) :: solver
+    integer, intent(in) :: checkpoints_kept
+    type(h5_file_t) :: file
+    integer :: shape3(3)
+    shape3 = [solver%grid%nx, solver%grid%ny, solver%grid%nz]
+    call checkpoint_begin(solver%step, file)
+    call write_interior(file, 'fluid/u', solver%u)
+    call write_interior(file, 'fluid/v', solver%v)
+    call write_interior(file, 'fluid/w', solver%w)
+    call write_interior(file, 'fluid/pressure', solver%pressure)
+    call write_interior(file, 'fluid/explicit_old_u', solver%explicit_old_u)
+    call write_interior(file, 'fluid/explicit_old_v', solver%explicit_old_v)
+    call write_interior(file, 'fluid/explicit_old_w', solver%explicit_old_w)
+    call h5_write_array(file, 'fluid/grid_shape', shape3)
+    call h5_write_array(file, 'fluid/time', solver%time)
+    call h5_write_array(file, 'fluid/dt_old', solver%dt_old)
+    call h5_write_array(file, 'fluid/step', solver%step)
+    call h5_write_array(file, 'fluid/has_history', merge(1, 0, solver%has_history))
+    call checkpoint_commit(file, solver%step, checkpoints_kept)
+
+  contains
+
+    subroutine write_interior(file, name, field)
+      type(h5_file_t), intent(in) :: file
+      character(len=*), intent(in) :: name
+      real(wp), intent(in) :: field(0:, 0:, 0:)
+      real(wp), allocatable :: interior(:, :, :)
+      interior = field(1:solver%grid%nx, 1:solver%grid%ny, 1:solver%grid%nz_local)
+      call h5_write_slab(file, name, interior, solver%grid%z_offset, shape3)
+    end subroutine write_interior
+  end subroutine write_fluid_checkpoint
+
+  !> The whole solver state from a checkpoint (any rank count: the slabs are re-cut on reading).
+  subroutine read_fluid_checkpoint(solver, path)
+    type(fluid_solver_t), intent(inout) :: solver
+    character(len=*), intent(in) :: path
+    type(h5_file_t) :: file
+    integer :: flag
+    call h5_open(file, path, writable=.false.)
+    call require_grid(file, 'fluid/grid_shape', path, solver)
+    call read_interior(file, 'fluid/u', solver%u, solver)
+    call read_interior(file, 'fluid/v', solver%v, solver)
+    call read_interior(file, 'fluid/w', solver%w, solver)
+    call read_interior(file, 'fluid/pressure', solver%pressure, solver)
+    call read_interior(file, 'fluid/explicit_old_u', solver%explicit_old_u, solver)
+    call read_interior(file, 'fluid/explicit_old_v', solver%explicit_old_v, solver)
+    call read_interior(file, 'fluid/explicit_old_w', solver%explicit_old_w, solver)
+    call h5_read_array(file, 'fluid/time', solver%time)
+    call h5_read_array(file, 'fluid/dt_old', solver%dt_old)
+    call h5_read_array(file, 'fluid/step', solver%step)
+    call h5_read_array(file, 'fluid/has_history', flag)
+    solver%has_history = (flag == 1)
+    call h5_close(file)
+    call fluid_exchange_velocity(solver)
+  end subroutine read_fluid_checkpoint
+
+  !> &fluid init = 'file': the velocity (and pressure if present) of a field snapshot
+  !> (fields/u, ...) or of a checkpoint (fluid/u, ...) written by Agglo on any rank count.
+  !> Time, step and multistep history start afresh.
+  subroutine read_initial_field(solver, path)
+    type(fluid_solver_t), intent(inout) :: solver
+    character(len=*), intent(in) :: path
+    type(h5_file_t) :: file
+    character(len=:), allocatable :: group
+    call h5_open(file, path, writable=.false.)
+    if (h5_exists(file, 'fields/u')) then
+      group = 'fields/'
+      call require_grid(file, 'grid/shape', path, solver)
+    else if (h5_exists(file, 'fluid/u')) then
+      group = 'fluid/'
+      call require_grid(file, 'fluid/grid_shape', path, solver)
+    else
+      call fatal('deck: &fluid init_file = '''//trim(path)//''' holds no velocity field '// &
+                 '(expected fields/u, v, w of a field snapshot or fluid/u, v, w of a checkpoint)')
+    end if
+    call read_interior(file, group//'u', solver%u, solver)
+    call read_interior(file, group//'v', solver%v, solver)
+    call read_interior(file, group//'w', solver%w, solver)
+    if (h5_exists(file, group//'pressure')) call read_interior(file, group//'pressure', solver%pressure, solver)
+    call h5_close(file)
+    call fluid_exchange_velocity(solver)
+  end subroutine read_initial_field
+
+  subroutine require_grid(file, name, path, solver)
+    type(h5_file_t), intent(in) :: file
+    character(len=*), intent(in) :: name, path
+    type(fluid_solver_t), intent(in) :: solver
+    integer, allocatable :: stored(:)
+    call h5_read_array(file, name, stored)
+    if (size(stored) /= 3) call fatal('file '//trim(path)//': '//name//' is not a 3-vector')
+    if (any(stored /= [solver%grid%nx, solver%grid%ny, solver%grid%nz])) call fatal('file '//trim(path)// &
+        ' holds a '//int_text(stored(1))//' x '//int_text(stored(2))//' x '//int_text(stored(3))// &
+        ' grid, the deck''s &grid is '//int_text(solver%grid%nx)//' x '//int_text(solver%grid%ny)//' x '// &
+        int_text(solver%grid%nz))
+  end subroutine require_grid
+
+  subroutine read_interior(file, name, field, solver)
+    type(h5_file_t), intent(in) :: file
+    character(len=*), intent(in) :: name
+    real(wp), intent(inout) :: field(0:, 0:, 0:)
+    type(fluid_solver_t), intent(in) :: solver
+    real(wp), allocatable :: interior(:, :, :)
+    allocate(interior(solver%grid%nx, solver%grid%ny, solver%grid%nz_local))
+    call h5_read_slab(file, name, interior, solver%grid%z_offset, [solver%grid%nx, solver%grid%ny, solver%grid%nz])
+    field(1:solver%grid%nx, 1:solver%grid%ny, 1:solver%grid%nz_local) = interior
+  end subroutine read_interior
+
+  !> fields_<step>.h5 with u, v, w (on their faces) and pressure (cell centres), and fields.xdmf.
+  subroutine write_fluid_snapshot(solver)
+    type(fluid_solver_t), intent(in) :: solver
+    type(field_snapshot_t) :: snapshot
+    call field_snapshot_begin(snapshot, solver%step, solver%time, [solver%grid%nx, solver%grid%ny, solver%grid%nz], &
+                              [solver%grid%lx, solver%grid%ly, solver%grid%lz])
+    call add('u', solver%u, at_x_face)
+    call add('v', solver%v, at_y_face)
+    call add('w', solver%w, at_z_face)
+    call add('pressure', solver%pressure, at_cell_centre)
+    call field_snapshot_end(snapshot)
+
+  contains
+
+    subroutine add(name, field, location)
+      character(len=*), intent(in) :: name, location
+      real(wp), intent(in) :: field(0:, 0:, 0:)
+      real(wp), allocatable :: interior(:, :, :)
+      interior = field(1:solver%grid%nx, 1:solver%grid%ny, 1:solver%grid%nz_local)
+      call field_snapshot_add(snapshot, name, interior, solver%grid%z_offset, location)
+    end subroutine add
+  end subroutine write_fluid_snapshot
+end module fluid_restart

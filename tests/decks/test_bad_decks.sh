@@ -1,0 +1,65 @@
+#!/usr/bin/env bash
+# Bad decks: each must stop the run with a non-zero exit and a message that names the group,
+# the variable and what is allowed (design.md, "Errors"). Runs the built executable ($AGGLO).
+set -u
+AGGLO=${AGGLO:?AGGLO must point to the built executable}
+work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
+cd "$work"
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
+
+# expect_error NAME RANKS DECK_TEXT PATTERN...: the run fails and its error output matches every pattern.
+expect_error() {
+  local name=$1 ranks=$2 text=$3; shift 3
+  printf '%s\n' "$text" > "$name.nml"
+  mpirun -np "$ranks" "$AGGLO" "$name.nml" > "$name.out" 2>&1; local status=$?
+  if [ $status -eq 0 ]; then echo "FAIL $name: exit status 0 for a bad deck"; return; fi
+  local pattern
+  for pattern in "$@"; do
+    if ! grep -q -- "$pattern" "$name.out"; then
+      echo "FAIL $name: message lacks '$pattern': $(grep 'agglo: error' "$name.out" | head -n 1)"; return
+    fi
+  done
+  echo "PASS $name  ($(grep -m1 'agglo: error' "$name.out" | cut -c1-150))"
+}
+
+fluid='&scene fluid = '"'"'resolved'"'"' /
+&grid nx = 8, ny = 8, nz = 8 /'
+
+if mpirun -np 1 "$AGGLO" does_not_exist.nml > missing.out 2>&1; then echo "FAIL missing_file: exit status 0"
+elif grep -q 'cannot read the input deck "does_not_exist.nml"' missing.out; then echo "PASS missing_file"
+else echo "FAIL missing_file: message does not name the file"; fi
+expect_error unknown_variable 1 "&run name = 'a', dtt = 1.0 /" '&run' 'dtt'
+expect_error group_typo 1 "&rnu name = 'a' /" 'unknown namelist group &rnu' 'known groups'
+expect_error duplicate_group 1 "&run name = 'a' /
+&run seed = 2 /" '&run appears more than once'
+expect_error unclosed_group 1 "&run name = 'a'" 'not closed'
+expect_error wrong_type 1 "&run name = 'a', seed = 'abc' /" '&run'
+expect_error wrong_type_logical 1 "&run name = 'a', restart = 7 /" '&run'
+expect_error nonpositive_cells 1 "&run name = 'a' /
+&grid nx = 0 /" '&grid nx = 0' '>= 1'
+expect_error nonpositive_length 1 "&run name = 'a' /
+&grid length_x = -1.0e-3 /" '&grid length_x' '> 0'
+expect_error nonpositive_dt 1 "&run name = 'a', dt = 0.0 /" '&run dt' '> 0'
+expect_error nonpositive_end_time 1 "&run name = 'a', end_time = -1.0 /" '&run end_time' '> 0'
+expect_error nonpositive_viscosity 1 "&run name = 'a' /
+&fluid viscosity = 0.0 /" '&fluid viscosity' '> 0'
+expect_error grid_not_divisible 2 "&run name = 'a' /
+&grid nx = 8, ny = 8, nz = 9 /" '&grid nz = 9' 'multiple of the number of MPI ranks (2)'
+expect_error unknown_scene_fluid 1 "&run name = 'a' /
+&scene fluid = 'navier' /" "&scene fluid = 'navier'" "'none' | 'stokes' | 'resolved'"
+expect_error unknown_dt_mode 1 "&run name = 'a', dt_mode = 'adaptive' /" "&run dt_mode = 'adaptive'" "'fixed' | 'cfl'"
+expect_error unknown_init 1 "&run name = 'a' /
+&fluid init = 'vortex' /" "&fluid init = 'vortex'" 'taylor_green'
+touch not_a_directory
+expect_error output_not_writable 1 "&run name = 'a' /
+&output directory = 'not_a_directory/sub' /" '&output directory' 'not_a_directory/sub'
+
+# An existing run is never replaced silently; overwrite = .true. replaces it; restart needs a run.
+mkdir -p existing
+echo "&run name = 'old' /" > existing/run.nml
+expect_error existing_run_refused 1 "&run name = 'a', end_time = 1.0e-9, dt = 1.0e-9 /
+$fluid
+&output directory = 'existing' /" '&output directory' 'overwrite = .true.'
+grep -q "name = 'old'" existing/run.nml && echo "PASS existing_run_untouched" || echo "FAIL existing_run_untouched: run.nml changed"
+expect_error restart_without_run 1 "&run name = 'fresh', restart = .true. /
+&output directory = 'nothing_here' /" '&run restart' 'no earlier run'

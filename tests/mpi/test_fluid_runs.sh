@@ -1,0 +1,78 @@
+#!/usr/bin/env bash
+# End-to-end runs of the resolved scene with $AGGLO (issue 2):
+#  - restart: 2n steps in one run == n steps + restart + n steps, bit for bit (h5diff, no tolerance)
+#    on 2 ranks with CFL-controlled dt and Crank-Nicolson (the multistep history and dt_old travel
+#    through the checkpoint);
+#  - 1 rank vs 2 ranks: the same deck gives the same fields to 1e-12 x amplitude (only the FFT's
+#    round-off differs between decompositions);
+#  - a fixed dt above the explicit-diffusion limit is refused with a message naming &run dt.
+# Prints PASS/FAIL lines; works in a temporary directory.
+set -u
+AGGLO=${AGGLO:?AGGLO must be the agglo executable}
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
+work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
+cd "$work"
+
+deck() { # name, max_steps, restart, dt_mode, viscous_scheme, dt
+  cat <<NML
+&run name = '$1', max_steps = $2, restart = $3, end_time = 1.0, dt = $6, dt_mode = '$4',
+     cfl_target = 0.3, overwrite = .true., progress_interval = 1000 /
+&scene fluid = 'resolved' /
+&grid nx = 16, ny = 16, nz = 16, length_x = 1.0e-3, length_y = 1.0e-3, length_z = 1.0e-3 /
+&fluid viscosity = 1.0e-6, viscous_scheme = '$5', init = 'random', init_amplitude = 0.02,
+       init_peak_wavenumber = 2.0 /
+&output directory = '$1', checkpoint_interval = 0, field_interval = 0.0 /
+NML
+}
+run() { # ranks, deck file
+  mpirun -np "$1" "$AGGLO" "$2" > "$2.out" 2>&1
+}
+final_checkpoint() { ls "$1"/checkpoints/checkpoint_*.h5 | sort | tail -n 1; }
+
+# --- restart bit for bit --------------------------------------------------------------------
+deck whole 20 .false. cfl crank_nicolson 1.0e-4 > whole.nml
+deck split 10 .false. cfl crank_nicolson 1.0e-4 > split1.nml
+deck split 20 .true. cfl crank_nicolson 1.0e-4 > split2.nml
+if run 2 whole.nml && run 2 split1.nml && run 2 split2.nml; then
+  a=$(final_checkpoint whole); b=$(final_checkpoint split)
+  if [ "$(basename "$a")" = checkpoint_0000000020.h5 ] && h5diff -q "$a" "$b" > diff.txt 2>&1; then
+    echo "PASS fluid_runs/restart_2n_equals_n_restart_n_bit_for_bit  ($(basename "$a"), h5diff exact)"
+  else
+    echo "FAIL fluid_runs/restart_2n_equals_n_restart_n_bit_for_bit: $a vs $b: $(head -c 300 diff.txt)"
+  fi
+else
+  echo "FAIL fluid_runs/restart_2n_equals_n_restart_n_bit_for_bit: a run failed: $(tail -n 3 ./*.nml.out | head -c 400)"
+fi
+
+# --- 1 rank vs 2 ranks ----------------------------------------------------------------------
+deck one 20 .false. fixed explicit 2.0e-5 > one.nml
+deck two 20 .false. fixed explicit 2.0e-5 > two.nml
+if run 1 one.nml && run 2 two.nml; then
+  ok=1; detail=""
+  for f in u v w; do
+    # Absolute tolerance 1e-12 x the 0.02 m/s amplitude.
+    if ! h5diff -d 2e-14 "$(final_checkpoint one)" "$(final_checkpoint two)" "/fluid/$f" > diff.txt 2>&1; then
+      ok=0; detail="$detail $f: $(head -c 200 diff.txt)"
+    fi
+  done
+  if [ $ok = 1 ]; then echo "PASS fluid_runs/one_rank_equals_two_ranks_to_1e-12  (u, v, w after 20 steps)"
+  else echo "FAIL fluid_runs/one_rank_equals_two_ranks_to_1e-12:$detail"; fi
+else
+  echo "FAIL fluid_runs/one_rank_equals_two_ranks_to_1e-12: a run failed: $(tail -n 3 one.nml.out two.nml.out | head -c 400)"
+fi
+
+# --- time-series file written every step ----------------------------------------------------
+rows=$(grep -vc '^#' one/fluid_statistics.dat 2>/dev/null || echo 0)
+if [ "$rows" = 21 ]; then echo "PASS fluid_runs/statistics_row_per_step  (21 rows: start + 20 steps)"
+else echo "FAIL fluid_runs/statistics_row_per_step: $rows rows in one/fluid_statistics.dat, expected 21"; fi
+
+# --- dt above the explicit-diffusion limit is refused ---------------------------------------
+# 16^3 in 1 mm, nu = 1e-6: limit dx^2 / (12 nu) = 3.26e-4 s; 1e-3 s must be refused.
+deck bad 20 .false. fixed explicit 1.0e-3 > bad.nml
+if run 1 bad.nml; then
+  echo "FAIL fluid_runs/dt_above_viscous_limit_refused: the run was accepted"
+elif grep -q "&run dt = 1.00000E-03 is not allowed; allowed: <= 3.25521E-04" bad.nml.out; then
+  echo "PASS fluid_runs/dt_above_viscous_limit_refused"
+else
+  echo "FAIL fluid_runs/dt_above_viscous_limit_refused: message was: $(grep -m1 error bad.nml.out)"
+fi
