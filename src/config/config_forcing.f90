@@ -10,7 +10,8 @@
 !>                              box, so the conversion happens when the forcing is set up.
 module config_forcing
   use agglo_kinds, only: wp
-  use deck_file, only: deck_t, check_namelist_read, require_positive, require_option, real_text
+  use deck_file, only: deck_t, check_namelist_read, require_positive, require_nonnegative, require_option, &
+                       real_text, int_text
   use error_handling, only: input_error
   implicit none
   private
@@ -32,11 +33,15 @@ module config_forcing
     real(wp) :: target_dissipation = forcing_unset   !< m^2/s^3, E&P estimate sets epsilon* (one of three)
     real(wp) :: kappa_f_ratio = 2.3_wp              !< cut-off kappa_F in units of kappa0 = 2 pi / L (paper: 2.3)
     character(len=16) :: update = 'exact'            !< 'exact' OU update | 'euler_maruyama' (paper Eq. 3)
+    integer :: statistics_interval = 100             !< steps between flow-statistics rows (flow_statistics.h5); 0 = none
+    real(wp) :: average_start = 0.0_wp               !< s, time averages of the flow statistics start here
   end type forcing_config_t
 
-  real(wp) :: time_scale, sigma, epsilon_star, target_dissipation, kappa_f_ratio
+  real(wp) :: time_scale, sigma, epsilon_star, target_dissipation, kappa_f_ratio, average_start
   character(len=16) :: update
-  namelist /forcing/ time_scale, sigma, epsilon_star, target_dissipation, kappa_f_ratio, update
+  integer :: statistics_interval
+  namelist /forcing/ time_scale, sigma, epsilon_star, target_dissipation, kappa_f_ratio, update, &
+                     statistics_interval, average_start
 
 contains
 
@@ -44,12 +49,14 @@ contains
     type(forcing_config_t), intent(in) :: cfg
     time_scale = cfg%time_scale; sigma = cfg%sigma; epsilon_star = cfg%epsilon_star
     target_dissipation = cfg%target_dissipation; kappa_f_ratio = cfg%kappa_f_ratio; update = cfg%update
+    statistics_interval = cfg%statistics_interval; average_start = cfg%average_start
   end subroutine to_namelist
 
   subroutine from_namelist(cfg)
     type(forcing_config_t), intent(inout) :: cfg
     cfg%time_scale = time_scale; cfg%sigma = sigma; cfg%epsilon_star = epsilon_star
     cfg%target_dissipation = target_dissipation; cfg%kappa_f_ratio = kappa_f_ratio; cfg%update = update
+    cfg%statistics_interval = statistics_interval; cfg%average_start = average_start
   end subroutine from_namelist
 
   subroutine read_forcing_group(deck, cfg)
@@ -105,6 +112,9 @@ contains
         real_text(cfg%kappa_f_ratio), '>= 1 (kappa_F in units of kappa0 = 2 pi / L; below kappa0 no '// &
         'wavevector is forced; the paper uses 2.3)')
     call require_option('forcing', 'update', cfg%update, [character(len=16) :: 'exact', 'euler_maruyama'])
+    if (cfg%statistics_interval < 0) call input_error('forcing', 'statistics_interval', &
+        int_text(cfg%statistics_interval), '>= 0 (steps between flow-statistics rows; 0 = none)')
+    call require_nonnegative('forcing', 'average_start', cfg%average_start)
     given = forcing_strength_input(cfg)
     if (given == '') call input_error('forcing', 'sigma / epsilon_star / target_dissipation', 'none given', &
         'exactly one of them (the forcing strength)')
