@@ -13,8 +13,10 @@ module forcing_driver
   use logger, only: log_line
   use error_handling, only: fatal
   use run_directory, only: run_file
-  use file_system, only: file_exists
-  use hdf5_io, only: h5_file_t, h5_create, h5_open, h5_close, h5_exists, h5_append, h5_write_array, h5_read_array
+  use file_system, only: file_exists, rename_file
+  use parallel_env, only: is_root, barrier
+  use hdf5_io, only: h5_file_t, h5_create, h5_open, h5_close, h5_exists, h5_append, h5_write_array, h5_read_array, &
+                     h5_write_slab
   use fluid_solver, only: fluid_solver_t, fluid_advance
   use eswaran_pope_forcing, only: ep_forcing_t, forcing_init_on_grid, forcing_advance, forcing_add_to, &
                                   forcing_power_input, forcing_pack_state, forcing_unpack_state
@@ -154,11 +156,38 @@ contains
     end if
   end function forcing_driver_state
 
-  !> The time averages of the flow statistics over [average_start, end] of this run segment.
-  subroutine forcing_driver_finish(driver)
+  !> At the end of a forced run: final_field.h5 in the run directory (the velocity and pressure in
+  !> the layout &fluid init = 'file' reads on any rank count: fluid/u, v, w, pressure, grid_shape,
+  !> plus the time reached and the forcing state for reference), then the time averages of the flow
+  !> statistics over [average_start, end] of this run segment in the log. Collective.
+  subroutine forcing_driver_finish(driver, solver)
     type(forcing_driver_t), intent(inout) :: driver
+    type(fluid_solver_t), intent(in) :: solver
+    type(h5_file_t) :: file
     real(wp) :: rows
-    if (.not. driver%active .or. driver%averaged_rows == 0) return
+    integer :: shape3(3)
+    logical :: renamed
+    if (.not. driver%active) return
+    shape3 = [solver%grid%nx, solver%grid%ny, solver%grid%nz]
+    call h5_create(file, run_file('final_field.h5.tmp'))
+    associate (g => solver%grid)
+      call h5_write_slab(file, 'fluid/u', solver%u(1:g%nx, 1:g%ny, 1:g%nz_local), g%z_offset, shape3)
+      call h5_write_slab(file, 'fluid/v', solver%v(1:g%nx, 1:g%ny, 1:g%nz_local), g%z_offset, shape3)
+      call h5_write_slab(file, 'fluid/w', solver%w(1:g%nx, 1:g%ny, 1:g%nz_local), g%z_offset, shape3)
+      call h5_write_slab(file, 'fluid/pressure', solver%pressure(1:g%nx, 1:g%ny, 1:g%nz_local), g%z_offset, shape3)
+    end associate
+    call h5_write_array(file, 'fluid/grid_shape', shape3)
+    call h5_write_array(file, 'fluid/time', solver%time)
+    call h5_write_array(file, 'forcing/state', forcing_pack_state(driver%forcing))
+    call h5_close(file)
+    call barrier()
+    if (is_root()) then
+      call rename_file(run_file('final_field.h5.tmp'), run_file('final_field.h5'), renamed)
+      if (.not. renamed) call fatal('forcing: cannot rename final_field.h5.tmp in '//run_file(''), collective=.false.)
+    end if
+    call barrier()
+    call log_line('forcing: final field (for &fluid init = ''file'') in '//run_file('final_field.h5'))
+    if (driver%averaged_rows == 0) return
     rows = real(driver%averaged_rows, wp)
     call log_line('flow averages over t = '//real_text(driver%first_averaged_time)//' .. '// &
         real_text(driver%last_averaged_time)//' s ('//int_text(driver%averaged_rows)//' rows):')

@@ -85,7 +85,7 @@ contains
     if (cfg%output%checkpoint_interval == 0 .or. &
         mod(solver%step, int(max(cfg%output%checkpoint_interval, 1), i8)) /= 0) call checkpoint(solver)
     call statistics_close()
-    call forcing_driver_finish(forcing)                                          ! [forcing]
+    call forcing_driver_finish(forcing, solver)                                        ! [forcing]
     call timing_report(solver, solver%step - first_step, wall_time() - start_wall)
     call log_line('resolved scene: '//trim(cfg%run%name)//' reached t = '//real_text(solver%time)//' s; '// &
         'time series '//run_file('fluid_statistics.dat')//', fields '//run_file('fields.xdmf')// &

@@ -75,3 +75,19 @@ rows=$(h5ls one/flow_statistics.h5/u_rms 2>/dev/null | sed -n 's/.*Dataset {\([0
 spectra=$(h5ls one/flow_statistics.h5/spectra 2>/dev/null | grep -c '^energy_')
 if [ "$rows" = 6 ] && [ "$spectra" = 6 ]; then echo "PASS forced_runs/flow_statistics_time_series_and_spectra  (6 rows, 6 spectra)"
 else echo "FAIL forced_runs/flow_statistics_time_series_and_spectra: $rows rows, $spectra spectra (expected 6, 6)"; fi
+
+# --- the final field loads with &fluid init = 'file' on another rank count ----------------------
+# one/ ran on 1 rank; load it on 2 ranks: the first snapshot of the new run is the loaded field, exactly.
+if [ -f one/final_field.h5 ]; then
+  sed -e "s/name = 'one'/name = 'load'/" -e "s/directory = 'one'/directory = 'load'/" \
+      -e "s/init = 'rest'/init = 'file', init_file = 'one\/final_field.h5'/" -e 's/max_steps = 60/max_steps = 1/' \
+      one.nml > load.nml
+  if run 2 load.nml && h5diff one/final_field.h5 load/fields_0000000000.h5 /fluid/u /fields/u > diff.txt 2>&1 \
+     && h5diff one/final_field.h5 load/fields_0000000000.h5 /fluid/w /fields/w >> diff.txt 2>&1; then
+    echo "PASS forced_runs/final_field_loads_on_another_rank_count  (1-rank final_field.h5 -> 2-rank init = 'file', exact)"
+  else
+    echo "FAIL forced_runs/final_field_loads_on_another_rank_count: $(head -c 300 diff.txt) $(tail -n 2 load.nml.out)"
+  fi
+else
+  echo "FAIL forced_runs/final_field_loads_on_another_rank_count: one/final_field.h5 was not written"
+fi
