@@ -9,7 +9,6 @@ module resolved_scene
   use logger, only: log_line
   use wall_clock, only: wall_time
   use run_directory, only: run_file
-  use hdf5_io, only: hdf5_io_finalize
   use checkpoint_files, only: newest_checkpoint
   use physical_constants, only: two_pi
   use fluid_solver, only: fluid_solver_t, fluid_solver_create, fluid_advance, timer_io
@@ -90,7 +89,6 @@ contains
     call log_line('resolved scene: '//trim(cfg%run%name)//' reached t = '//real_text(solver%time)//' s; '// &
         'time series '//run_file('fluid_statistics.dat')//', fields '//run_file('fields.xdmf')// &
         ', checkpoints '//run_file('checkpoints'))
-    call hdf5_io_finalize()
 
   contains
 

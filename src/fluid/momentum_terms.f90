@@ -22,9 +22,9 @@ contains
   !> r = -N(u) + viscosity L(u) for all three components (interiors). viscosity = 0 gives advection only.
   subroutine explicit_terms(grid, u, v, w, viscosity, ru, rv, rw)
     type(fluid_grid_t), intent(in) :: grid
-    real(wp), intent(in) :: u(0:, 0:, 0:), v(0:, 0:, 0:), w(0:, 0:, 0:)
+    real(wp), intent(in), contiguous :: u(0:, 0:, 0:), v(0:, 0:, 0:), w(0:, 0:, 0:)
     real(wp), intent(in) :: viscosity
-    real(wp), intent(inout) :: ru(0:, 0:, 0:), rv(0:, 0:, 0:), rw(0:, 0:, 0:)
+    real(wp), intent(inout), contiguous :: ru(0:, 0:, 0:), rv(0:, 0:, 0:), rw(0:, 0:, 0:)
     integer :: i, j, k
     real(wp) :: qx, qy, qz, cx, cy, cz, adv
     qx = 0.25_wp / grid%dx; qy = 0.25_wp / grid%dy; qz = 0.25_wp / grid%dz
@@ -76,8 +76,8 @@ contains
   !> lf = L f, the 7-point Laplacian (interior).
   subroutine laplacian(grid, f, lf)
     type(fluid_grid_t), intent(in) :: grid
-    real(wp), intent(in) :: f(0:, 0:, 0:)
-    real(wp), intent(inout) :: lf(0:, 0:, 0:)
+    real(wp), intent(in), contiguous :: f(0:, 0:, 0:)
+    real(wp), intent(inout), contiguous :: lf(0:, 0:, 0:)
     integer :: i, j, k
     real(wp) :: cx, cy, cz
     cx = 1.0_wp / grid%dx**2; cy = 1.0_wp / grid%dy**2; cz = 1.0_wp / grid%dz**2
@@ -95,9 +95,9 @@ contains
   !> div = scale * (discrete divergence of (u,v,w)) at the cell centres (interior).
   subroutine divergence(grid, u, v, w, scale, div)
     type(fluid_grid_t), intent(in) :: grid
-    real(wp), intent(in) :: u(0:, 0:, 0:), v(0:, 0:, 0:), w(0:, 0:, 0:)
+    real(wp), intent(in), contiguous :: u(0:, 0:, 0:), v(0:, 0:, 0:), w(0:, 0:, 0:)
     real(wp), intent(in) :: scale
-    real(wp), intent(inout) :: div(0:, 0:, 0:)
+    real(wp), intent(inout), contiguous :: div(0:, 0:, 0:)
     integer :: i, j, k
     real(wp) :: cx, cy, cz
     cx = scale / grid%dx; cy = scale / grid%dy; cz = scale / grid%dz
@@ -114,9 +114,9 @@ contains
   !> (u,v,w) -= factor * grad phi on the faces (interior); phi's halos must be current.
   subroutine subtract_gradient(grid, phi, factor, u, v, w)
     type(fluid_grid_t), intent(in) :: grid
-    real(wp), intent(in) :: phi(0:, 0:, 0:)
+    real(wp), intent(in), contiguous :: phi(0:, 0:, 0:)
     real(wp), intent(in) :: factor
-    real(wp), intent(inout) :: u(0:, 0:, 0:), v(0:, 0:, 0:), w(0:, 0:, 0:)
+    real(wp), intent(inout), contiguous :: u(0:, 0:, 0:), v(0:, 0:, 0:), w(0:, 0:, 0:)
     integer :: i, j, k
     real(wp) :: cx, cy, cz
     cx = factor / grid%dx; cy = factor / grid%dy; cz = factor / grid%dz

@@ -150,19 +150,23 @@ contains
     type(poisson_fft_t), intent(inout) :: solver
     real(wp), intent(in) :: rhs(0:, 0:, 0:)
     real(wp), intent(inout) :: solution(0:, 0:, 0:)
-    integer :: i, j, k
+    integer :: i, j, k, first
     real(wp) :: eigen_yz
     call forward(solver, rhs)
     do j = 1, solver%ny_local
       do k = 1, solver%nz
         eigen_yz = solver%eigen_y(j) + solver%eigen_z(k)
-        do i = 1, solver%nx_complex
+        first = 1
+        if (eigen_yz == 0.0_wp) then
+          ! The k = 0 mode (only where ky = kz = 0) is undetermined: the solution has zero mean.
+          solver%spectral_view(1, k, j) = (0.0_wp, 0.0_wp)
+          first = 2
+        end if
+        do i = first, solver%nx_complex
           solver%spectral_view(i, k, j) = solver%spectral_view(i, k, j) / (-(solver%eigen_x(i) + eigen_yz))
         end do
       end do
     end do
-    ! The k = 0 mode (global j = 1, on the rank whose y slab starts at 0) is undetermined: set it to zero.
-    if (solver%y_offset == 0) solver%spectral_view(1, 1, 1) = (0.0_wp, 0.0_wp)
     call inverse(solver, solution)
   end subroutine poisson_solve
 
