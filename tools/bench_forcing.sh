@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Forcing benchmark (issue 3): the Eswaran-Pope forcing's cost per step (evaluation on the u, v, w
-# faces + OU update; the fluid step's zeroing of the force arrays included) as a fraction of a
+# faces + OU update; the fluid step's arrays written in place, no zeroing pass) as a fraction of a
 # fluid step (Crank-Nicolson AB2 + FFT projection, as input/hit_box.nml), at 64^3 and 128^3.
 # Target <= 10%. Usage: BUILD=build NP=2 tools/bench_forcing.sh  (results: docs/performance.md)
 set -u

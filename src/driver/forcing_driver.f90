@@ -18,7 +18,7 @@ module forcing_driver
   use hdf5_io, only: h5_file_t, h5_create, h5_open, h5_close, h5_exists, h5_append, h5_write_array, h5_read_array, &
                      h5_write_slab
   use fluid_solver, only: fluid_solver_t, fluid_advance
-  use eswaran_pope_forcing, only: ep_forcing_t, forcing_init_on_grid, forcing_advance, forcing_add_to, &
+  use eswaran_pope_forcing, only: ep_forcing_t, forcing_init_on_grid, forcing_advance, forcing_set_fields, &
                                   forcing_power_input, forcing_pack_state, forcing_unpack_state
   use flow_statistics, only: flow_statistics_t, compute_flow_statistics
   implicit none
@@ -87,8 +87,7 @@ contains
       call fluid_advance(solver, dt)
       return
     end if
-    driver%fx = 0; driver%fy = 0; driver%fz = 0
-    call forcing_add_to(driver%forcing, driver%fx, driver%fy, driver%fz)
+    call forcing_set_fields(driver%forcing, driver%fx, driver%fy, driver%fz)
     call fluid_advance(solver, dt, driver%fx, driver%fy, driver%fz)
     call forcing_advance(driver%forcing, dt)
   end subroutine forced_fluid_advance

@@ -34,6 +34,7 @@ module eswaran_pope_forcing
   implicit none
   private
   public :: ep_forcing_t, forcing_init, forcing_init_on_grid, forcing_advance, forcing_add_to, forcing_set_field, &
+            forcing_set_fields, &
             forcing_power_input, forcing_state_size, forcing_pack_state, forcing_unpack_state, &
             forcing_mode_extent, forcing_mode_is_forced, ep_power_estimate, epsilon_star_for_dissipation, &
             forcing_pair_count, forcing_mode_integers, forcing_wavevectors, forcing_coefficients, &
@@ -358,9 +359,18 @@ contains
     integer, intent(in) :: component
     real(wp), intent(inout) :: field(0:, 0:, 0:)
     call check_shape(self, field)
-    field(1:self%nx, 1:self%ny, 1:self%nz_local) = 0.0_wp
-    call evaluate_component(self, component, 1.0_wp, target=field)
+    call evaluate_component(self, component, 1.0_wp, target=field, overwrite=.true.)
   end subroutine forcing_set_field
+
+  !> fx, fy, fz = f on the u, v, w faces of the local interior (halos untouched): the time loop's
+  !> force arrays, written without a separate zeroing pass.
+  subroutine forcing_set_fields(self, fx, fy, fz)
+    type(ep_forcing_t), intent(in) :: self
+    real(wp), intent(inout) :: fx(0:, 0:, 0:), fy(0:, 0:, 0:), fz(0:, 0:, 0:)
+    call forcing_set_field(self, 1, fx)
+    call forcing_set_field(self, 2, fy)
+    call forcing_set_field(self, 3, fz)
+  end subroutine forcing_set_fields
 
   !> Power input per unit mass <f.u> (m^2/s^3): the box average of f_x u + f_y v + f_z w, each
   !> product taken at the component's own faces. Collective (global sum over the ranks).
@@ -383,19 +393,23 @@ contains
         call fatal('forcing: field array smaller than the local slab (0:nx+1, 0:ny+1, 0:nz_local+1)')
   end subroutine check_shape
 
-  !> The separable direct sum for one component: with target, target += scale f; with velocity
-  !> and dot, dot = sum over the local faces of scale f * velocity.
-  subroutine evaluate_component(self, component, scale, target, velocity, dot)
+  !> The separable direct sum for one component: with target, target += scale f (target = scale f
+  !> with overwrite); with velocity and dot, dot = sum over the local faces of scale f * velocity.
+  subroutine evaluate_component(self, component, scale, target, velocity, dot, overwrite)
     type(ep_forcing_t), intent(in) :: self
     integer, intent(in) :: component
     real(wp), intent(in) :: scale
     real(wp), intent(inout), optional :: target(0:, 0:, 0:)
     real(wp), intent(in), optional :: velocity(0:, 0:, 0:)
     real(wp), intent(out), optional :: dot
+    logical, intent(in), optional :: overwrite
     real(wp) :: local_dot
+    logical :: replace
     integer :: at_x, at_y, at_z, i, j, k, m, n1, n2
     complex(wp), allocatable :: plane(:,:), row_coefficient(:)
     real(wp), allocatable :: row(:), row_re(:), row_im(:)
+    replace = .false.
+    if (present(overwrite)) replace = overwrite
     associate (m1 => self%mode_extent(1), m2 => self%mode_extent(2), nx => self%nx)
       at_x = merge(at_face, at_centre, component == 1)
       at_y = merge(at_face, at_centre, component == 2)
@@ -425,7 +439,13 @@ contains
               row(i) = row(i) + (row_re(n1) * self%ex_re(i, n1, at_x) - row_im(n1) * self%ex_im(i, n1, at_x))
             end do
           end do
-          if (present(target)) target(1:nx, j, k) = target(1:nx, j, k) + row
+          if (present(target)) then
+            if (replace) then
+              target(1:nx, j, k) = row
+            else
+              target(1:nx, j, k) = target(1:nx, j, k) + row
+            end if
+          end if
           if (present(velocity)) local_dot = local_dot + sum(row * velocity(1:nx, j, k))
         end do
       end do
