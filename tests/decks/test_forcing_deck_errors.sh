@@ -72,3 +72,9 @@ expect_error forcing_with_stokes "&scene forcing = 'eswaran_pope' with fluid = '
 printf '%s\n%s\n%s\n' "$base" "$forced" "&forcing target_dissipation = 8.0e-3, update = 'euler_maruyama' /" > good.nml
 if "$AGGLO" good.nml > good.out 2>&1; then echo "PASS good_forcing_deck_accepted"
 else echo "FAIL good_forcing_deck_accepted: $(head -c 300 good.out)"; fi
+
+# The resolved deck run.nml (unset strength inputs written as -huge) reads back as a valid deck.
+if [ -f output/f/run.nml ] && cp output/f/run.nml resolved.nml && "$AGGLO" resolved.nml > resolved.out 2>&1 \
+   && grep -q 'from target_dissipation' resolved.out; then
+  echo "PASS resolved_deck_with_unset_strengths_reads_back"
+else echo "FAIL resolved_deck_with_unset_strengths_reads_back: $(grep -m1 error resolved.out 2>/dev/null)"; fi
