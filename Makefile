@@ -7,6 +7,7 @@ MODE  ?= release
 NP    ?= 2
 BUILD ?= build
 DECK  ?= input/default.nml
+VENV  ?= .venv
 
 FC := mpifort
 CC := mpicc
@@ -39,8 +40,10 @@ TEST_SUPPORT := $(shell find tests -name '*.f90' \( -path 'tests/framework/*' -o
 TEST_DIRS := $(shell find tests -type d)
 TEST_PROGRAMS := $(patsubst %.f90,$(BUILD)/tests/%,$(notdir $(TEST_SOURCES)))
 TEST_SUPPORT_OBJECTS := $(patsubst %.f90,$(OBJ)/%.o,$(notdir $(TEST_SUPPORT)))
+BENCH_SOURCES := $(shell find tools/bench -name 'bench_*.f90' 2>/dev/null | sort)
+BENCH_PROGRAMS := $(patsubst %.f90,$(BUILD)/bench/%,$(notdir $(BENCH_SOURCES)))
 
-vpath %.f90 $(SRC_DIRS) $(TEST_DIRS)
+vpath %.f90 $(SRC_DIRS) $(TEST_DIRS) tools/bench
 vpath %.c $(SRC_DIRS)
 
 DEB_PACKAGES := gfortran libopenmpi-dev openmpi-bin libfftw3-dev libfftw3-mpi-dev libhdf5-openmpi-dev \
@@ -49,8 +52,15 @@ DEB_PACKAGES := gfortran libopenmpi-dev openmpi-bin libfftw3-dev libfftw3-mpi-de
 export OMPI_ALLOW_RUN_AS_ROOT := 1
 export OMPI_ALLOW_RUN_AS_ROOT_CONFIRM := 1
 MPIRUN := mpirun --oversubscribe
+# V=1 prints every compiler command; by default one short line per file.
+ifeq ($(V),1)
+  Q :=
+else
+  Q = @echo "  $(notdir $@)";
+endif
 
 .PHONY: help deps build run test bench clean tools-deps
+.SECONDARY:
 help: ## list the targets
 	@echo "Agglo - make targets (MODE=release|debug, NP=ranks, DECK=deck for run):"
 	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | sed -E 's/^([a-z-]+):.*## (.*)/  make \1\t\2/' | expand -t 20
@@ -70,27 +80,30 @@ deps: ## install the Debian packages Agglo needs (only those missing)
 build: $(BUILD)/agglo ## build build/agglo (out of source)
 
 $(BUILD)/agglo: $(OBJ)/agglo.o $(BUILD)/libagglo.a
-	$(FC) $(FFLAGS) -o $@ $^ $(LIBS)
+	$(Q)$(FC) $(FFLAGS) -o $@ $^ $(LIBS)
 
 $(BUILD)/libagglo.a: $(LIB_OBJECTS)
 	@rm -f $@
-	ar rcs $@ $^
+	$(Q)ar rcs $@ $^
 
 $(OBJ)/%.o: %.f90 | $(OBJ) $(MOD)
-	$(FC) $(FFLAGS) -c $< -o $@
+	$(Q)$(FC) $(FFLAGS) -c $< -o $@
 
 $(OBJ)/%.o: %.c | $(OBJ)
-	$(CC) $(CFLAGS) -c $< -o $@
+	$(Q)$(CC) $(CFLAGS) -c $< -o $@
 
 $(BUILD)/tests/%: $(OBJ)/%.o $(TEST_SUPPORT_OBJECTS) $(BUILD)/libagglo.a | $(BUILD)/tests
-	$(FC) $(FFLAGS) -o $@ $< $(TEST_SUPPORT_OBJECTS) $(BUILD)/libagglo.a $(LIBS)
+	$(Q)$(FC) $(FFLAGS) -o $@ $< $(TEST_SUPPORT_OBJECTS) $(BUILD)/libagglo.a $(LIBS)
 
-$(OBJ) $(MOD) $(BUILD)/tests:
+$(BUILD)/bench/%: $(OBJ)/%.o $(BUILD)/libagglo.a | $(BUILD)/bench
+	$(Q)$(FC) $(FFLAGS) -o $@ $< $(BUILD)/libagglo.a $(LIBS)
+
+$(OBJ) $(MOD) $(BUILD)/tests $(BUILD)/bench:
 	@mkdir -p $@
 
 # Module dependencies, generated from the sources (never maintained by hand).
-$(BUILD)/deps.mk: $(SOURCES) $(TEST_SOURCES) $(TEST_SUPPORT) tools/fortran-deps.sh | $(OBJ)
-	@tools/fortran-deps.sh $(OBJ) $(SOURCES) $(TEST_SUPPORT) $(TEST_SOURCES) > $@
+$(BUILD)/deps.mk: $(SOURCES) $(TEST_SOURCES) $(TEST_SUPPORT) $(BENCH_SOURCES) tools/fortran-deps.sh | $(OBJ)
+	@tools/fortran-deps.sh $(OBJ) $(SOURCES) $(TEST_SUPPORT) $(TEST_SOURCES) $(BENCH_SOURCES) > $@
 ifneq ($(filter-out help clean deps tools-deps,$(MAKECMDGOALS)),)
 include $(BUILD)/deps.mk
 endif
@@ -99,12 +112,26 @@ run: deps ## install, build, and run DECK (default input/default.nml) on NP rank
 	@$(MAKE) --no-print-directory build
 	$(MPIRUN) -np $(NP) $(BUILD)/agglo $(DECK)
 
-test: deps ## install, build, and run every test (closing line "N passed, N failed")
+test: deps tools-deps ## install, build, and run every test (closing line "N passed, N failed")
 	@$(MAKE) --no-print-directory build $(TEST_PROGRAMS)
 	@BUILD=$(BUILD) tests/run_tests.sh
 
+# The Python tools (tools/agglo-stats, tests/python) run in a venv made with Debian's python3
+# (python3 on PATH may be another interpreter); the stamp makes a second call silent.
+PYTHON3 := $(firstword $(wildcard /usr/bin/python3) python3)
+tools-deps: deps $(VENV)/.requirements-installed ## install the Python tools' packages into .venv
+	@:
+
+$(VENV)/.requirements-installed: tools/requirements.txt
+	@[ -x $(VENV)/bin/python ] || $(PYTHON3) -m venv $(VENV) \
+	  || { echo "tools-deps: '$(PYTHON3) -m venv' failed (Debian package python3-venv)" >&2; exit 1; }
+	@echo "tools-deps: installing tools/requirements.txt into $(VENV)"
+	@$(VENV)/bin/python -m pip install -q -r tools/requirements.txt \
+	  || { echo "tools-deps: pip could not install tools/requirements.txt into $(VENV)" >&2; exit 1; }
+	@touch $@
+
 bench: deps ## run the benchmarks (results for docs/performance.md)
-	@$(MAKE) --no-print-directory build $(TEST_PROGRAMS)
+	@$(MAKE) --no-print-directory build $(BENCH_PROGRAMS)
 	@BUILD=$(BUILD) tools/bench.sh
 
 clean: ## remove the build directory

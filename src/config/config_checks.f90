@@ -30,6 +30,9 @@ contains
     if (cfg%scene%fluid /= 'resolved' .and. cfg%scene%particles == 'none') call input_error('scene', &
         'particles', '''none'' with fluid = '''//trim(cfg%scene%fluid)//'''', &
         '''pair'' (a fluid-free or Stokes scene has nothing to compute without particles)')
+    if (cfg%scene%fluid /= 'resolved' .and. cfg%run%dt_mode /= 'fixed') call input_error('run', 'dt_mode', &
+        ''''//trim(cfg%run%dt_mode)//''' with fluid = '''//trim(cfg%scene%fluid)//'''', &
+        '''fixed'' (the CFL number is a property of the resolved fluid)')
   end subroutine check_scene_combinations
 
   !> Resolved fluid: the grid must split into equal slabs along z and y (pencil transposes of the FFT).
@@ -101,9 +104,18 @@ contains
         real_text(cfg%forcing%time_scale)//' s', '''exact'' (any dt), or euler_maruyama with dt <= time_scale')
   end subroutine check_forcing_cross
 
+  !> Particle models: the nanometre-scale lengths must be far below the particle size (the DLVO and
+  !> collision models are surface-gap models in the Derjaguin limit, h << r).
   subroutine check_particle_cross(cfg)
     type(agglo_config_t), intent(in) :: cfg
-    real(wp) :: unused
-    unused = cfg%pair%radius
+    if (cfg%scene%dlvo) then
+      if (.not. (cfg%dlvo%vdw_cutoff < 0.01_wp * cfg%pair%radius)) call input_error('dlvo', 'vdw_cutoff', &
+          real_text(cfg%dlvo%vdw_cutoff), '< 0.01 * &pair radius = '//real_text(0.01_wp * cfg%pair%radius)//' m')
+    end if
+    if (cfg%scene%collisions) then
+      if (.not. (cfg%collision%detection_floor < 0.01_wp * cfg%pair%radius)) call input_error('collision', &
+          'detection_floor', real_text(cfg%collision%detection_floor), &
+          '< 0.01 * &pair radius = '//real_text(0.01_wp * cfg%pair%radius)//' m')
+    end if
   end subroutine check_particle_cross
 end module config_checks

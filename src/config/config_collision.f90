@@ -1,28 +1,37 @@
-!> Namelist group &collision: hard-body collisions (stub: extended by the particle work).
+!> Namelist group &collision: hard-body collisions (detection distance and impulse model).
+!> Defaults: the paper's model (section 2.2.4, Eq. 24) with Table 1's restitution.
 module config_collision
   use agglo_kinds, only: wp
-  use deck_file, only: deck_t, check_namelist_read, require_positive
+  use deck_file, only: deck_t, check_namelist_read, require_positive, require_nonnegative, require_range, &
+                       require_option
   implicit none
   private
   public :: collision_config_t, read_collision_group, check_collision_group, write_collision_group
 
   type :: collision_config_t
-    real(wp) :: restitution = 0.4_wp   !< normal restitution coefficient (paper, Table 1)
+    real(wp) :: restitution = 0.4_wp                !< normal restitution coefficient e (Table 1)
+    character(len=16) :: model = 'paper'            !< 'paper' | 'frictionless' | 'coulomb'
+    real(wp) :: friction_coefficient = 0.1_wp       !< Coulomb friction mu_c (model = 'coulomb' only)
+    real(wp) :: detection_floor = 1.0e-9_wp         !< m, smallest detection distance
+    real(wp) :: detection_factor = 1.0_wp           !< detection distance = max(floor, factor v_n dt)
   end type collision_config_t
 
-  real(wp) :: restitution
-  namelist /collision/ restitution
+  real(wp) :: restitution, friction_coefficient, detection_floor, detection_factor
+  character(len=16) :: model
+  namelist /collision/ restitution, model, friction_coefficient, detection_floor, detection_factor
 
 contains
 
   subroutine to_namelist(cfg)
     type(collision_config_t), intent(in) :: cfg
-    restitution = cfg%restitution
+    restitution = cfg%restitution; model = cfg%model; friction_coefficient = cfg%friction_coefficient
+    detection_floor = cfg%detection_floor; detection_factor = cfg%detection_factor
   end subroutine to_namelist
 
   subroutine from_namelist(cfg)
     type(collision_config_t), intent(inout) :: cfg
-    cfg%restitution = restitution
+    cfg%restitution = restitution; cfg%model = model; cfg%friction_coefficient = friction_coefficient
+    cfg%detection_floor = detection_floor; cfg%detection_factor = detection_factor
   end subroutine from_namelist
 
   subroutine read_collision_group(deck, cfg)
@@ -38,7 +47,11 @@ contains
 
   subroutine check_collision_group(cfg)
     type(collision_config_t), intent(in) :: cfg
-    call require_positive('collision', 'restitution', cfg%restitution)
+    call require_range('collision', 'restitution', cfg%restitution, 0.0_wp, 1.0_wp)
+    call require_option('collision', 'model', cfg%model, [character(len=16) :: 'paper', 'frictionless', 'coulomb'])
+    call require_nonnegative('collision', 'friction_coefficient', cfg%friction_coefficient)
+    call require_positive('collision', 'detection_floor', cfg%detection_floor)
+    call require_positive('collision', 'detection_factor', cfg%detection_factor)
   end subroutine check_collision_group
 
   subroutine write_collision_group(unit, cfg)

@@ -27,14 +27,16 @@ module config_pair
     real(wp) :: centre_position(3) = [0.5e-3_wp, 0.5e-3_wp, 0.5e-3_wp]  !< m
     real(wp) :: box_length = 1.0e-3_wp            !< m, box for centre = 'random'
     logical :: mirror_first_collision = .true.    !< end at twice the first-collision time (paper)
+    character(len=16) :: integrator = 'euler'     !< rigid-body update: 'euler' (paper) | 'verlet' (2nd order)
   end type pair_config_t
 
-  character(len=16) :: shape, orientation, approach, centre
+  character(len=16) :: shape, orientation, approach, centre, integrator
   real(wp) :: aspect_ratio, radius, density, axis1(3), angle1, axis2(3), angle2, approach_direction(3), &
               gap, relative_speed, centre_position(3), box_length
   logical :: mirror_first_collision
   namelist /pair/ shape, aspect_ratio, radius, density, orientation, axis1, angle1, axis2, angle2, approach, &
-                  approach_direction, gap, relative_speed, centre, centre_position, box_length, mirror_first_collision
+                  approach_direction, gap, relative_speed, centre, centre_position, box_length, mirror_first_collision, &
+                  integrator
 
 contains
 
@@ -45,7 +47,7 @@ contains
     angle2 = cfg%angle2; approach = cfg%approach; approach_direction = cfg%approach_direction
     gap = cfg%gap; relative_speed = cfg%relative_speed; centre = cfg%centre
     centre_position = cfg%centre_position; box_length = cfg%box_length
-    mirror_first_collision = cfg%mirror_first_collision
+    mirror_first_collision = cfg%mirror_first_collision; integrator = cfg%integrator
   end subroutine to_namelist
 
   subroutine from_namelist(cfg)
@@ -55,7 +57,7 @@ contains
     cfg%angle2 = angle2; cfg%approach = approach; cfg%approach_direction = approach_direction
     cfg%gap = gap; cfg%relative_speed = relative_speed; cfg%centre = centre
     cfg%centre_position = centre_position; cfg%box_length = box_length
-    cfg%mirror_first_collision = mirror_first_collision
+    cfg%mirror_first_collision = mirror_first_collision; cfg%integrator = integrator
   end subroutine from_namelist
 
   subroutine read_pair_group(deck, cfg)
@@ -93,6 +95,7 @@ contains
         real_text(cfg%relative_speed), '>= 0')
     call require_option('pair', 'centre', cfg%centre, [character(len=8) :: 'given', 'random'])
     call require_positive('pair', 'box_length', cfg%box_length)
+    call require_option('pair', 'integrator', cfg%integrator, [character(len=8) :: 'euler', 'verlet'])
   end subroutine check_pair_group
 
   subroutine write_pair_group(unit, cfg)

@@ -63,3 +63,27 @@ $fluid
 grep -q "name = 'old'" existing/run.nml && echo "PASS existing_run_untouched" || echo "FAIL existing_run_untouched: run.nml changed"
 expect_error restart_without_run 1 "&run name = 'fresh', restart = .true. /
 &output directory = 'nothing_here' /" '&run restart' 'no earlier run'
+
+# The pair protocol (issue: overlapping start, gap <= 0, unknown shape, aspect ratio <= 0).
+pair="&run name = 'p' /
+&scene fluid = 'none', particles = 'pair' /"
+expect_error pair_zero_gap 1 "$pair
+&pair gap = 0.0 /" '&pair gap' '> 0'
+expect_error pair_overlapping_start 1 "$pair
+&pair gap = -1.0e-6 /" '&pair gap' '> 0'
+expect_error pair_unknown_shape 1 "$pair
+&pair shape = 'cube' /" "&pair shape = 'cube'" "'sphere' | 'needle' | 'disk' | 'spheroid'"
+expect_error pair_aspect_ratio_zero 1 "$pair
+&pair shape = 'spheroid', aspect_ratio = 0.0 /" '&pair aspect_ratio' '> 0'
+expect_error pair_needle_aspect_below_one 1 "$pair
+&pair shape = 'needle', aspect_ratio = 0.5 /" '&pair aspect_ratio' "> 1 for shape = 'needle'"
+expect_error pair_negative_speed 1 "$pair
+&pair relative_speed = -1.0e-3 /" '&pair relative_speed' '>= 0'
+expect_error pair_zero_axis 1 "$pair
+&pair orientation = 'given', axis1 = 0.0, 0.0, 0.0 /" '&pair axis1' 'non-zero'
+expect_error pair_scene_cfl 1 "&run name = 'p', dt_mode = 'cfl' /
+&scene fluid = 'none', particles = 'pair' /" "&run dt_mode = 'cfl'" "'fixed'"
+expect_error pair_without_particles 1 "&run name = 'p' /
+&scene fluid = 'stokes' /" '&scene particles' "'pair'"
+expect_error resolved_with_pair 1 "&run name = 'p' /
+&scene fluid = 'resolved', particles = 'pair' /" 'immersed-boundary coupling'
