@@ -13,8 +13,6 @@
 !>  - in-memory restart: a copy of the solver state plus the packed forcing state continues bit for bit.
 !> With arguments "fields PATH": 40 forced steps from rest, the velocity written to PATH (HDF5) for
 !> the 1-rank vs 2-rank comparison of tests/validation/test_forced_box_ranks.sh.
-!> With arguments "bench N": the forcing's cost per step (evaluation on the faces + OU update) against
-!> a whole fluid step (Crank-Nicolson, as input/hit_box.nml) on N^3 (tools/bench_forcing.sh).
 program test_forced_box
   use agglo_kinds, only: wp, i8
   use config_forcing, only: forcing_config_t
@@ -23,8 +21,7 @@ program test_forced_box
   use fluid_solver, only: fluid_solver_t, fluid_solver_create, fluid_advance
   use flow_statistics, only: flow_statistics_t, compute_flow_statistics
   use hdf5_io, only: h5_file_t, h5_create, h5_close, h5_write_slab, hdf5_io_finalize
-  use parallel_env, only: parallel_start, is_root, n_ranks, global_max, barrier
-  use wall_clock, only: wall_time
+  use parallel_env, only: parallel_start, is_root
   use test_framework, only: test_start, test_finish, check, check_close
   implicit none
 
@@ -44,8 +41,6 @@ program test_forced_box
   call test_start('forced_box')
   if (mode == 'fields') then
     call write_fields(trim(path))
-  else if (mode == 'bench') then
-    call bench(trim(path))
   else
     call power_balance_and_restart()
   end if
@@ -154,40 +149,4 @@ contains
     call h5_close(file)
     call check(.true., 'fields_written')
   end subroutine write_fields
-
-  subroutine bench(cells_text)
-    character(len=*), intent(in) :: cells_text
-    type(fluid_solver_t) :: solver
-    type(ep_forcing_t) :: forcing
-    real(wp), allocatable :: fx(:,:,:), fy(:,:,:), fz(:,:,:)
-    integer :: cells, step, repeats
-    real(wp) :: t0, forcing_time, fluid_time, bench_dt
-    read(cells_text, *) cells
-    repeats = max(5, nint(20.0_wp * (64.0_wp / cells)**3))
-    bench_dt = 1.0e-4_wp
-    call fluid_solver_create(solver, cells, cells, cells, length, length, length, nu, rho, 'crank_nicolson', 'estimate')
-    call forcing_init_on_grid(forcing, cfg, 20250224, solver%grid)
-    allocate(fx, fy, fz, mold=solver%u)
-    fx = 0; fy = 0; fz = 0
-    ! Warm-up (first touches, FFTW buffers), then timed loops; the slowest rank counts.
-    call forcing_set_fields(forcing, fx, fy, fz)
-    call fluid_advance(solver, bench_dt, fx, fy, fz)
-    call barrier()
-    t0 = wall_time()
-    do step = 1, repeats
-      call forcing_set_fields(forcing, fx, fy, fz)
-      call forcing_advance(forcing, bench_dt)
-    end do
-    forcing_time = global_max((wall_time() - t0) / repeats)
-    call barrier()
-    t0 = wall_time()
-    do step = 1, repeats
-      call fluid_advance(solver, bench_dt, fx, fy, fz)
-    end do
-    fluid_time = global_max((wall_time() - t0) / repeats)
-    if (is_root()) write(*, '(a,i0,a,i0,a,f9.3,a,f9.3,a,f6.2,a)') 'bench forcing ', cells, '^3 on ', n_ranks, &
-        ' rank(s): forcing ', 1.0e3_wp * forcing_time, ' ms/step, fluid step ', 1.0e3_wp * fluid_time, &
-        ' ms/step, fraction ', 100.0_wp * forcing_time / fluid_time, ' %'
-    call check(forcing_time < 0.10_wp * fluid_time, 'forcing_below_10_percent_of_a_fluid_step')
-  end subroutine bench
 end program test_forced_box
