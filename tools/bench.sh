@@ -6,12 +6,14 @@ set -eu
 cd "$(dirname "$0")/.."
 BUILD=${BUILD:-build}
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
-make --no-print-directory -s build "$BUILD/bench/bench_fluid" "$BUILD/bench/bench_pair"
+make --no-print-directory -s build "$BUILD/bench/bench_fluid" "$BUILD/bench/bench_pair" \
+  "$BUILD/bench/bench_forcing"   # [forcing]
 work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
 exe=$PWD/$BUILD/bench/bench_fluid
 pair_exe=$PWD/$BUILD/bench/bench_pair
+forcing_exe=$PWD/$BUILD/bench/bench_forcing   # [forcing]
 agglo=$PWD/$BUILD/agglo
-parts=${BENCH_PARTS:-fluid pair}   # e.g. BENCH_PARTS=pair make bench
+parts=${BENCH_PARTS:-fluid pair forcing}   # e.g. BENCH_PARTS=pair make bench
 echo "Agglo fluid benchmark on $(nproc) cores: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')"
 echo "compiler: $(mpifort --version | head -n 1); flags: -O3 -march=native -funroll-loops; FFTW_ESTIMATE plans"
 echo "    N  R  fft_pair   poisson      step  adv+diff  proj(P)      halo   io(4f)   [ms, medians]  ns/pt/step  poisson/fft"
@@ -24,6 +26,19 @@ for n in 64 128; do
   done
 done
 fi
+
+# [forcing] Eswaran-Pope forcing per step against a whole Crank-Nicolson fluid step (input/hit_box.nml);
+# target <= 10% (issue 3). Means over 20 (64^3) or 5 (128^3) repetitions, slowest rank.
+if [[ $parts == *forcing* ]]; then
+  echo
+  echo "Forcing:    N  R  forcing_ms   step_ms  percent"
+  for n in 64 128; do
+    for ranks in 1 2; do
+      echo "         $(cd "$work" && mpirun -np $ranks "$forcing_exe" $n $(( n == 64 ? 20 : 5 )) | tail -n 1)"
+    done
+  done
+fi
+
 [[ $parts == *pair* ]] || exit 0
 
 # Particle pair: cost of one particle step by part, and the wall time of one paper-protocol run
