@@ -1,12 +1,12 @@
 !> Namelist group &forcing: Eswaran & Pope (1988) stochastic forcing of the resolved box
-!> (physics.md section 3; paper section 2.1, Eqs. 2-6). SI units throughout.
+!> (docs/physics.md section 3; paper section 2.1, Eqs. 2-6). SI units throughout.
 !>
 !> The strength is set in exactly one of three ways (the other two stay unset):
 !>   sigma              m/s^2   standard deviation of the real and of the imaginary part of each
 !>                              component of the Ornstein-Uhlenbeck coefficients b^ (paper Eq. 3)
 !>   epsilon_star       m^2/s^3 epsilon* = sigma^2 T_L (paper, after Eq. 3), dimensional here
 !>   target_dissipation m^2/s^3 the energy input wanted; epsilon* follows from the finite-T_L
-!>                              estimate of Eswaran & Pope (physics.md section 3), which needs the
+!>                              estimate of Eswaran & Pope (docs/physics.md section 3), which needs the
 !>                              box, so the conversion happens when the forcing is set up.
 module config_forcing
   use agglo_kinds, only: wp

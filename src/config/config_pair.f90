@@ -1,4 +1,4 @@
-!> Namelist group &pair: the two-particle set-up of the paper's protocol (design.md).
+!> Namelist group &pair: the two-particle set-up of the paper's protocol (docs/design.md).
 !> Both particles have the same shape; the pair is placed with an exact surface gap along its
 !> closest-approach vector and each particle moves towards the other at relative_speed / 2.
 module config_pair

@@ -1,4 +1,4 @@
-!> Namelist group &scene: which models the run switches on (design.md, "Fidelity").
+!> Namelist group &scene: which models the run switches on (docs/design.md, "Fidelity").
 !> Nothing that is off is allocated or computed.
 module config_scene
   use deck_file, only: deck_t, check_namelist_read, require_option, require_positive_int

@@ -1,5 +1,5 @@
 !> The resolved scene: DNS of the periodic box (fluid only until the immersed boundary lands).
-!> The loop follows design.md's data flow: time step -> momentum predictor + projection
+!> The loop follows docs/design.md's data flow: time step -> momentum predictor + projection
 !> (fluid_advance) -> statistics, health check, output, checkpoint.
 module resolved_scene
   use agglo_kinds, only: wp, i8

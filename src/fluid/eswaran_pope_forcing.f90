@@ -1,5 +1,5 @@
 !> Eswaran & Pope (1988) stochastic forcing, as described by Chouippe & Uhlmann (2015) and the
-!> paper (section 2.1, Eqs. 2-6); physics.md section 3.
+!> paper (section 2.1, Eqs. 2-6); docs/physics.md section 3.
 !>
 !>   f(x,t) = sum_{0 < |k| <= kappa_F} f^(k,t) exp(i k.x),   k = (2 pi n1/Lx, 2 pi n2/Ly, 2 pi n3/Lz)
 !>
@@ -41,9 +41,9 @@ module eswaran_pope_forcing
             forcing_projected, forcing_sigma, forcing_epsilon_star, forcing_time_scale, forcing_kappa0
   public :: forcing_stream_id, update_exact, update_euler_maruyama
 
-  integer, parameter :: forcing_stream_id = 2          !< interfaces.md: stream 2 = forcing
+  integer, parameter :: forcing_stream_id = 2          !< docs/design.md, "Conventions": stream 2 = forcing
   integer, parameter :: update_exact = 1, update_euler_maruyama = 2
-  !> E&P (1988) finite-T_L estimate constant (physics.md section 3).
+  !> E&P (1988) finite-T_L estimate constant (docs/physics.md section 3).
   real(wp), parameter :: ep_constant = 0.8_wp
   integer(i8), parameter :: state_format = 20250301_i8   !< first word of a packed state
   integer, parameter :: state_header = 4                 !< format, pairs, update kind, steps
@@ -96,7 +96,7 @@ contains
         k_over_kappa0_squared <= kappa_f_ratio**2 * (1.0_wp + cutoff_slack)**2
   end function forcing_mode_is_forced
 
-  !> E&P (1988) estimate of the mean energy input (physics.md section 3), m^2/s^3:
+  !> E&P (1988) estimate of the mean energy input (docs/physics.md section 3), m^2/s^3:
   !> eps_T = 4 eps* N_F / (1 + T_L* N_F^(1/3) / 0.8), T_L* = T_L eps*^(1/3) kappa0^(2/3);
   !> N_F counts +k and -k. Without the denominator it is the white-noise (T_L -> 0) limit.
   pure function ep_power_estimate(epsilon_star, time_scale, kappa0, n_forced) result(power)

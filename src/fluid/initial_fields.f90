@@ -12,7 +12,7 @@ module initial_fields
   private
   public :: set_rest, set_taylor_green, taylor_green_exact, set_random_field, random_stream_id
 
-  integer, parameter :: random_stream_id = 1     !< stream of the fluid's initial field (interfaces.md)
+  integer, parameter :: random_stream_id = 1     !< stream of the fluid's initial field (docs/design.md, "Conventions")
   real(wp) :: filter_peak = 1.0_wp               !< 1/m, peak wavenumber seen by random_filter_weight
 
 contains
@@ -23,7 +23,7 @@ contains
   end subroutine set_rest
 
   !> The 2-D Taylor-Green vortex in x-y, uniform in z, an exact Navier-Stokes solution
-  !> (physics.md section 2, generalised to lx /= ly with a = 2 pi / lx, b = 2 pi / ly):
+  !> (docs/physics.md section 2, generalised to lx /= ly with a = 2 pi / lx, b = 2 pi / ly):
   !>   u = U sin(a x) cos(b y) g,  v = -U (a/b) cos(a x) sin(b y) g,  w = 0,  g = exp(-nu (a^2 + b^2) t),
   !>   p = rho U^2 / 4 (cos 2ax + (a/b)^2 cos 2by) g^2.
   subroutine set_taylor_green(solver, amplitude)

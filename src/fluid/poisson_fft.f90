@@ -3,7 +3,7 @@
 !>
 !> The discrete 7-point Laplacian L of a periodic grid is diagonal in Fourier space with the
 !> eigenvalues -(kx~^2 + ky~^2 + kz~^2), kx~ = 2 sin(kx dx / 2) / dx (the "modified wavenumbers";
-!> physics.md section 2). Dividing by these (not by the exact k^2) makes the solution satisfy
+!> docs/physics.md section 2). Dividing by these (not by the exact k^2) makes the solution satisfy
 !> the discrete equation to round-off, so the projected velocity is discretely solenoidal.
 !> The same eigenvalues serve the face-centred velocity components: a shift of the grid does not
 !> change the spectrum of a constant-coefficient periodic operator.

@@ -64,7 +64,7 @@ module particle_output
     real(wp) :: vdw_force = 0.0_wp          !< N, magnitude of the van der Waals part
   end type pair_record_t
 
-  !> One collision: contact points as parametric angles of each unrotated spheroid (physics.md 0).
+  !> One collision: contact points as parametric angles of each unrotated spheroid (docs/physics.md 0).
   type :: collision_event_t
     real(wp) :: time = 0.0_wp                    !< s
     real(wp) :: theta1 = 0.0_wp, phi1 = 0.0_wp   !< rad, contact point on particle 1

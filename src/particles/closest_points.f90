@@ -1,4 +1,4 @@
-!> Closest points of two spheroids by the common-normal condition (physics.md section 6; the problem
+!> Closest points of two spheroids by the common-normal condition (docs/physics.md section 6; the problem
 !> of Jain, Tschisgale & Froehlich, Int. J. Multiph. Flow 120, 103087 (2019), corrigendum 2022):
 !> points x1, x2 on the two surfaces whose outward normals are opposite, n1 = -n2 = n, and whose
 !> difference is parallel to them, x2 - x1 = h n. h is the signed surface gap (negative = overlap).

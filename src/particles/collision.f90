@@ -1,5 +1,5 @@
 !> Hard-body collisions of two rigid spheroids (paper section 2.2.4 after Jain, Tschisgale &
-!> Froehlich 2019; physics.md section 6).
+!> Froehlich 2019; docs/physics.md section 6).
 !> Detection (paper: a dynamic distance scaled by the approaching normal velocity): a collision
 !> happens when the pair approaches (v_n > 0 at the closest points) and the surface gap is below
 !>   d_detect = max(detection_floor, detection_factor * v_n * dt).
@@ -136,7 +136,7 @@ contains
     approach_speed = dot_product(point_velocity(body1, point1) - point_velocity(body2, point2), normal)
   end function approach_speed
 
-  !> K of the pair at lever arms r1, r2 (physics.md section 6).
+  !> K of the pair at lever arms r1, r2 (docs/physics.md section 6).
   pure function contact_matrix(inverse_mass_sum, inverse_inertia1, lever1, inverse_inertia2, lever2) result(k)
     real(wp), intent(in) :: inverse_mass_sum, inverse_inertia1(3, 3), lever1(3), inverse_inertia2(3, 3), lever2(3)
     real(wp) :: k(3, 3), s1(3, 3), s2(3, 3)

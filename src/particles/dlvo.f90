@@ -5,7 +5,7 @@
 !> Sign convention: a scalar force F > 0 is repulsive. The force on particle 2 is +F n, on
 !> particle 1 it is -F n (n = unit normal from particle 1 to particle 2), each applied at that
 !> particle's closest point, so it also gives torque; as x2 - x1 is parallel to n the pair's
-!> angular momentum is conserved. physics.md section 7 has every formula used here.
+!> angular momentum is conserved. docs/physics.md section 7 has every formula used here.
 module dlvo
   use agglo_kinds, only: wp
   use vector_algebra, only: cross
@@ -59,7 +59,7 @@ module dlvo
 contains
 
   !> chi_eta at the closest points: curvatures from each point's parametric phi (k = meridional,
-  !> k' = parallel, physics.md sec. 7), alpha between the two meridian tangents (turned to the lab
+  !> k' = parallel, docs/physics.md sec. 7), alpha between the two meridian tangents (turned to the lab
   !> frame) projected onto the tangent plane of the common normal.
   pure real(wp) function contact_curvature_factor(model, shape1, orientation1, shape2, orientation2, contact)
     type(dlvo_model_t), intent(in) :: model
@@ -92,7 +92,7 @@ contains
                           evaluation%torque2)
   end subroutine dlvo_evaluate
 
-  !> Kinetic energy available to separate the pair (bound-state test, physics.md sec. 7): the normal
+  !> Kinetic energy available to separate the pair (bound-state test, docs/physics.md sec. 7): the normal
   !> relative velocity of the closest points with the reduced mass, mu v_n^2 / 2 (the pair's common
   !> rotation is not energy that can separate it).
   pure real(wp) function relative_normal_energy(body1, body2, contact)
@@ -242,7 +242,7 @@ contains
   end function alpha_sine_squared
 
   !> Eq. 14 of the paper with curvatures k = 1/R (meridional) and k' = 1/R' (parallel) of each body
-  !> (labelling of physics.md section 7) and sigma = r:
+  !> (labelling of docs/physics.md section 7) and sigma = r:
   !> chi_eta = (2/r) / sqrt((k1 - k1')(k2 - k2') sin^2 alpha + (k1 + k1')(k2 + k2')).
   pure real(wp) function chi_eta_eq14(radius, k1, k1p, k2, k2p, sin2_alpha)
     real(wp), intent(in) :: radius, k1, k1p, k2, k2p, sin2_alpha

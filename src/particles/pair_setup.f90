@@ -1,4 +1,4 @@
-!> The paper's pair set-up (design.md, "The paper's simulation protocol"): two spheroids of the same
+!> The paper's pair set-up (docs/design.md, "The paper's simulation protocol"): two spheroids of the same
 !> shape with uniformly random (or given) orientations, placed so that their surface gap along the
 !> closest-approach vector is exactly the deck's gap, each moving towards the other along that
 !> vector at half the relative speed.

@@ -1,5 +1,5 @@
 !> Unit quaternions, scalar first: q = (w, x, y, z) = (cos(angle/2), sin(angle/2) axis).
-!> Convention (physics.md section 0): q rotates body -> lab, v_lab = R(q) v_body = q (x) (0, v) (x) q*,
+!> Convention (docs/physics.md section 0): q rotates body -> lab, v_lab = R(q) v_body = q (x) (0, v) (x) q*,
 !> and the kinematics are dq/dt = 1/2 q (x) (0, omega_body) with omega_body the angular velocity
 !> in body axes. Quaternions are plain real(wp) arrays of size 4 so that they can be stored,
 !> written and communicated without a derived type.
@@ -149,7 +149,7 @@ contains
   end function quaternion_from_matrix
 
   !> Uniformly distributed rotation (Haar measure) by Shoemake's method (Graphics Gems III, 1992),
-  !> physics.md section 1. Uniform Euler angles would be biased.
+  !> docs/physics.md section 1. Uniform Euler angles would be biased.
   function random_orientation(stream) result(q)
     type(random_stream_t), intent(inout) :: stream
     real(wp) :: q(4), u1, u2, u3
@@ -161,7 +161,7 @@ contains
     q = quaternion_normalise(q)
   end function random_orientation
 
-  !> dq/dt = 1/2 q (x) (0, omega_body) (physics.md section 0), for integrators that need the rate.
+  !> dq/dt = 1/2 q (x) (0, omega_body) (docs/physics.md section 0), for integrators that need the rate.
   pure function quaternion_rate(q, omega_body) result(dq)
     real(wp), intent(in) :: q(4), omega_body(3)
     real(wp) :: dq(4)

@@ -1,4 +1,4 @@
-!> Rigid-body state and Newton-Euler update of one particle (physics.md section 5; Eq. 11 of the paper).
+!> Rigid-body state and Newton-Euler update of one particle (docs/physics.md section 5; Eq. 11 of the paper).
 !> Frames: position, velocity, forces and torques are in the LAB frame; the angular velocity is
 !> STORED IN THE BODY FRAME (angular_velocity_body, principal axes, x = symmetry axis), where
 !> Euler's equations are diagonal; angular_velocity_lab / set_angular_velocity_lab convert.
@@ -216,7 +216,7 @@ contains
     body%angular_velocity_body(j) = (-s * momentum(i) + c * momentum(j)) / body%inertia_body(j)
   end subroutine free_rotation_about_axis
 
-  !> n_sub particle steps of dt / n_sub under loads frozen over the fluid step (design.md, sub-steps).
+  !> n_sub particle steps of dt / n_sub under loads frozen over the fluid step (docs/design.md, sub-steps).
   pure subroutine rigid_body_substeps(body, force, torque, dt, n_sub, integrator)
     type(rigid_body_t), intent(inout) :: body
     real(wp), intent(in) :: force(3), torque(3), dt

@@ -1,4 +1,4 @@
-!> Analytic spheroid geometry in the body frame (physics.md sections 0 and 1).
+!> Analytic spheroid geometry in the body frame (docs/physics.md sections 0 and 1).
 !> The symmetry axis is body x with semi-axis a; the other two semi-axes are b (= c).
 !> Needle: a > b (prolate); disk: a < b (oblate); sphere: a = b. Volume-equivalent radius r: a b^2 = r^3.
 !> Parametric surface angles (the paper's Figs. 5-7): x = a cos(phi), y = b sin(phi) cos(theta),
@@ -116,7 +116,7 @@ contains
   end function surface_normal
 
   !> Principal curvatures (1/m, positive: the surface is convex) at parametric angle phi, with
-  !> D = a^2 sin^2(phi) + b^2 cos^2(phi) (physics.md section 1):
+  !> D = a^2 sin^2(phi) + b^2 cos^2(phi) (docs/physics.md section 1):
   !> meridional kappa_m = a b / D^(3/2), parallel kappa_p = a / (b sqrt(D)).
   pure subroutine principal_curvatures(s, phi, kappa_meridional, kappa_parallel)
     type(spheroid_t), intent(in) :: s
@@ -189,7 +189,7 @@ contains
   end function normal_at_point
 
   !> The surface point whose outward normal is m (body frame, any non-zero length):
-  !> y = S^2 m / sqrt(m^T S^2 m), S = diag(a, b, b) (physics.md section 6). It is also the support
+  !> y = S^2 m / sqrt(m^T S^2 m), S = diag(a, b, b) (docs/physics.md section 6). It is also the support
   !> point: the point of the spheroid furthest along m.
   pure function support_point(s, m) result(y)
     type(spheroid_t), intent(in) :: s

@@ -13,9 +13,9 @@
 !>   alpha_2 = alpha_3 = (chi/2 - a/b^2) / d,  alpha_1 = 2/(a b^2) - 2 alpha_2  (sum alpha_i = 2/(a b^2)).
 !> Near a sphere (|d| < 0.1 a^2) the closed form cancels, so the power series in d of
 !> chi = int_a^inf 2 ds/(s^2 + d) and alpha_2 = int_a^inf 2 ds/(s^2 + d)^2 is used instead.
-!> Reference values (physics.md sec. 4), normalised by 6 pi mu r U and 8 pi mu r^3 Omega:
+!> Reference values (docs/physics.md sec. 4), normalised by 6 pi mu r U and 8 pi mu r^3 Omega:
 !> needle (5): 1.0438, 1.3865, 0.7061, 4.6405; disk (1/5): 1.4731, 1.1279, 2.6718, 2.2398.
-!> The drag is quasi-steady (no added mass, no Basset history): physics.md sec. 7 explains why
+!> The drag is quasi-steady (no added mass, no Basset history): docs/physics.md sec. 7 explains why
 !> that is the 'stokes' scene's model.
 module stokes_resistance
   use agglo_kinds, only: wp

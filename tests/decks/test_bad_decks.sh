@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Bad decks: each must stop the run with a non-zero exit and a message that names the group,
-# the variable and what is allowed (design.md, "Errors"). Runs the built executable ($AGGLO).
+# the variable and what is allowed (docs/design.md, "Errors"). Runs the built executable ($AGGLO).
 set -u
 AGGLO=${AGGLO:?AGGLO must point to the built executable}
 work=$(mktemp -d); trap 'rm -rf "$work"' EXIT

@@ -134,7 +134,7 @@ def test_partial_batch_reports_the_skipped_runs(spaced_tmp):
 
 
 def test_batch_without_any_contact_still_gives_rates_and_figures(spaced_tmp):
-    # The quiescent protocol at 'stokes' fidelity never touches (physics.md section 7): 0 of n,
+    # The quiescent protocol at 'stokes' fidelity never touches (docs/physics.md section 7): 0 of n,
     # whose Wilson interval is [0, z^2/(n + z^2)] = [0, 0.56150] for n = 3.
     make_fake_batch(str(spaced_tmp), {"disk": (0, 0, 3)}, fluid="stokes")
     result = run_tool([AGGLO_STATS, spaced_tmp])

@@ -14,7 +14,7 @@ from agglo_stats import wilson_interval
 from conftest import AGGLO_STATS, MONTECARLO, REPO, run_tool
 
 # Short runs: past the first contact of the quiescent protocol (5 um closed at 0.875 mm/s takes
-# 5.7 ms; design.md) but shorter than the protocol's equal time after it.
+# 5.7 ms; docs/design.md) but shorter than the protocol's equal time after it.
 END_TIME = "8.0e-3"
 
 

@@ -26,7 +26,7 @@ program test_collision
   call test_start('collision')
 
   ! Head-on spheres (unequal masses): the normal relative velocity after is exactly -e times before
-  ! (definition of e, physics.md sec. 6), for every model and e in {0, 0.4, 1}.
+  ! (definition of e, docs/physics.md sec. 6), for every model and e in {0, 0.4, 1}.
   do i = 1, 3
     e = restitutions(i)
     cfg = collision_config_t(restitution=e)
@@ -140,7 +140,7 @@ contains
       q2 = quaternion_normalise([stream_normal(stream), stream_normal(stream), stream_normal(stream), stream_normal(stream)])
       theta = pi * stream_uniform(stream)
       phi = pi * (2.0_wp * stream_uniform(stream) - 1.0_wp)
-      ! Body 1 at the origin + offset; surface point and outward normal at (theta, phi) (physics.md sec. 0/1).
+      ! Body 1 at the origin + offset; surface point and outward normal at (theta, phi) (docs/physics.md sec. 0/1).
       y = [axes1(1) * cos(phi), axes1(2) * sin(phi) * cos(theta), axes1(2) * sin(phi) * sin(theta)]
       mb = y / [axes1(1)**2, axes1(2)**2, axes1(2)**2]
       normal = rotate_to_lab(q1, mb / norm2(mb))

@@ -28,7 +28,7 @@ program test_dlvo
   call dlvo_log_constants(model)          ! 3.7e-4 C/m^2, 293 K, eps_r 80.1, cut-off 5 nm)
 
   ! Reference numbers computed independently in Python (plain math module, the same CODATA/SI
-  ! constants) from physics.md section 7: n = kappa^2 eps_r eps0 kT / 2e^2, Grahame for psi0,
+  ! constants) from docs/physics.md section 7: n = kappa^2 eps_r eps0 kT / 2e^2, Grahame for psi0,
   ! Theta = tanh(e psi0 / 4kT), F = -A r/(12 max(h,5nm)^2) + 64 pi r n kT Theta^2 exp(-kappa h)/kappa.
   call check_close(model%ion_number_density, 6.046919645743229e24_wp, 1.0e-12_wp, 'ion_number_density_from_kappa')
   call check_close(model%surface_potential, 1.585706078703882e-3_wp, 1.0e-10_wp, 'grahame_surface_potential')
@@ -66,7 +66,7 @@ program test_dlvo
     call check_close(numeric, dlvo_force(model, h, 1.7_wp), 1.0e-6_wp, 'force_is_minus_energy_gradient_'//gap_name(h))
   end do
 
-  ! Equal spheres: all curvatures 1/r, chi_eta = 1 for any alpha, both forms (physics.md sec. 7).
+  ! Equal spheres: all curvatures 1/r, chi_eta = 1 for any alpha, both forms (docs/physics.md sec. 7).
   do i = 0, 4
     s2 = real(i, wp) / 4.0_wp
     call check_close(chi_eta_eq14(r, 1/r, 1/r, 1/r, 1/r, s2), 1.0_wp, 1.0e-14_wp, 'spheres_chi_eta_eq14_'//char(48 + i))
@@ -174,7 +174,7 @@ contains
     call check_below(norm2(lab_torque), 1.0e-9_wp * norm2(ev%torque1), 'contact_oblique_torque_balance')
     call check(norm2(ev%torque1) > 0.0_wp, 'contact_oblique_has_torque')
     ! Bound-state energy: with Table 1 there is no EDL barrier, so the escape energy at the cut-off
-    ! is -U(5 nm) = 1.8475e-17 J (equal spheres, physics.md sec. 7: ~1.9e-17 J).
+    ! is -U(5 nm) = 1.8475e-17 J (equal spheres, docs/physics.md sec. 7: ~1.9e-17 J).
     call check_close(escape_energy(model, 5.0e-9_wp, 1.0_wp), 1.8475188693778787e-17_wp, 1.0e-9_wp, 'escape_energy_spheres_5nm')
     call check_close(relative_normal_energy(body1, body1, contact), 0.0_wp, 0.0_wp, 'relative_energy_at_rest', abs_tol=0.0_wp)
   end subroutine contact_checks

@@ -2,7 +2,7 @@
 !> evaluated field (FFTW, serial), divergence-free coefficients (Eq. 4), Hermitian completion (real
 !> field), independence of the slab decomposition, the power input <f.u> (Parseval), the E&P
 !> estimate and its inverse, and bit-for-bit continuation from a packed state.
-!> References: physics.md section 3; paper section 2.1, Eqs. 2-6.
+!> References: docs/physics.md section 3; paper section 2.1, Eqs. 2-6.
 program test_eswaran_pope_forcing
   use, intrinsic :: iso_c_binding
   use agglo_kinds, only: wp, i8
@@ -40,7 +40,7 @@ program test_eswaran_pope_forcing
 contains
 
   !> kappa_F = 2.3 kappa0 in a cubic box forces exactly the 56 vectors with 0 < |n|^2 <= 5, i.e. 28
-  !> +-k pairs (physics.md section 3: 6 + 12 + 8 + 6 + 24 vectors on the shells |n|^2 = 1..5).
+  !> +-k pairs (docs/physics.md section 3: 6 + 12 + 8 + 6 + 24 vectors on the shells |n|^2 = 1..5).
   subroutine test_mode_set()
     integer, allocatable :: modes(:,:)
     integer :: m, other, squared
@@ -147,7 +147,7 @@ contains
     do m = 1, size(modes, 2)
       divergence = max(divergence, abs(sum(k(:, m) * recovered(:, m))) / (norm2(k(:, m)) * f_scale))
     end do
-    ! Reference: content only on the forced wavevectors (physics.md section 3), Eq. 4.
+    ! Reference: content only on the forced wavevectors (docs/physics.md section 3), Eq. 4.
     call check_below(outside / inside, 1.0e-12_wp, label//'_spectrum_only_on_forced_wavevectors')
     call check_below(coefficient_error, 1.0e-12_wp, label//'_fft_recovers_f_hat')
     call check_below(divergence, 1.0e-12_wp, label//'_k_dot_f_hat_zero')
@@ -207,7 +207,7 @@ contains
   end subroutine test_power_input
 
   !> The three ways to set the strength agree (epsilon* = sigma^2 T_L, paper after Eq. 3), and the
-  !> target-dissipation route inverts the E&P estimate (physics.md section 3).
+  !> target-dissipation route inverts the E&P estimate (docs/physics.md section 3).
   subroutine test_strength_inputs()
     type(forcing_config_t) :: other
     real(wp), parameter :: lengths(3) = [1.0e-3_wp, 1.0e-3_wp, 1.0e-3_wp]

@@ -1,5 +1,5 @@
 !> Statistics of the Ornstein-Uhlenbeck coefficients of eswaran_pope_forcing, for both update forms.
-!> Theory (paper Eqs. 5-6; physics.md section 3): every real and imaginary part of every component
+!> Theory (paper Eqs. 5-6; docs/physics.md section 3): every real and imaginary part of every component
 !> is an independent OU process with mean 0, variance sigma^2 and autocorrelation
 !> sigma^2 exp(-s/T_L). Each process gives one estimate of each statistic from its time series;
 !> the processes are independent, so the standard error of the average estimate is the spread of

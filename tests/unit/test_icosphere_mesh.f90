@@ -1,7 +1,7 @@
 !> Tests of icosphere_mesh: counts, closed and consistently oriented surface, vertices on the
 !> spheroid, outward unit normals, and second-order convergence of volume and area to the analytic
 !> spheroid with the subdivision level (edge length halves per level: error ratio -> 4); the
-!> 320-face volume deficit and face-centre depth quoted in physics.md section 1.
+!> 320-face volume deficit and face-centre depth quoted in docs/physics.md section 1.
 program test_icosphere_mesh
   use agglo_kinds, only: wp
   use physical_constants, only: pi
@@ -59,7 +59,7 @@ program test_icosphere_mesh
     call check(all(volume_error > 0.0_wp) .and. all(area_error > 0.0_wp), 'inscribed_mesh_smaller_'//trim(label))
   end do
 
-  ! physics.md section 1: the 320-face icosphere (level 2) has 3.4% less volume than the spheroid
+  ! docs/physics.md section 1: the 320-face icosphere (level 2) has 3.4% less volume than the spheroid
   ! (the deficit is shape-independent: the affine map (a, b, b) scales both volumes alike), and facet
   ! centres lie up to 1.8% of the radius inside the true surface (sphere).
   call build_icosphere_mesh(shapes(1), 2, mesh)

@@ -1,7 +1,7 @@
 ! ranks: 2
 !> Tests of poisson_fft on an anisotropic grid split over 2 ranks.
 !> Manufactured discrete solutions: pick phi, form rhs = L phi with the same 7-point stencil the
-!> solver inverts; the FFT solve with the modified wavenumbers (physics.md section 2) must return
+!> solver inverts; the FFT solve with the modified wavenumbers (docs/physics.md section 2) must return
 !> phi to round-off. Reference: the exact discrete eigenvalues, so the only error is round-off.
 program test_poisson_fft
   use agglo_kinds, only: wp, i8

@@ -26,7 +26,7 @@ program test_spheroid
   disk = make_spheroid('disk', radius, density)
   sphere = make_spheroid('sphere', radius, density)
 
-  ! physics.md section 0: aspect ratio 5, r = 50 um: needle a = 146.2 um, b = 29.24 um;
+  ! docs/physics.md section 0: aspect ratio 5, r = 50 um: needle a = 146.2 um, b = 29.24 um;
   ! disk a = 17.10 um, b = 85.50 um (4 significant figures given there).
   call check_close(needle%a, 146.2e-6_wp, 5.0e-4_wp, 'needle_a_146.2um')
   call check_close(needle%b, 29.24e-6_wp, 5.0e-4_wp, 'needle_b_29.24um')
@@ -55,7 +55,7 @@ program test_spheroid
   end do
   call check_close(surface_area(sphere), 4*pi*radius**2, 1.0e-14_wp, 'sphere_area')
 
-  ! Pole and equator curvatures, physics.md section 1: pole both a/b^2; equator kappa_m = b/a^2,
+  ! Pole and equator curvatures, docs/physics.md section 1: pole both a/b^2; equator kappa_m = b/a^2,
   ! kappa_p = 1/b; sphere 1/r.
   do i = 1, size(shapes)
     write(label, '(a,f0.4)') 'ar_', shapes(i)%aspect_ratio

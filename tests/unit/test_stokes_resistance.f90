@@ -1,4 +1,4 @@
-!> Unit tests of stokes_resistance: Oberbeck/Perrin coefficients against physics.md section 4 and
+!> Unit tests of stokes_resistance: Oberbeck/Perrin coefficients against docs/physics.md section 4 and
 !> the analytic exponential decay of a lone spheroid's translation and rotation in quiescent fluid.
 program test_stokes_resistance
   use agglo_kinds, only: wp
@@ -15,7 +15,7 @@ program test_stokes_resistance
 
   call test_start('stokes_resistance')
 
-  ! physics.md section 4 (Oberbeck/Perrin, normalised by 6 pi mu r U and 8 pi mu r^3 Omega):
+  ! docs/physics.md section 4 (Oberbeck/Perrin, normalised by 6 pi mu r U and 8 pi mu r^3 Omega):
   needle = [1.0438_wp, 1.3865_wp, 0.7061_wp, 4.6405_wp]
   disk = [1.4731_wp, 1.1279_wp, 2.6718_wp, 2.2398_wp]
   lambda = 5.0_wp

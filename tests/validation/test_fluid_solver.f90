@@ -2,7 +2,7 @@
 !> Validation of the fluid solver (fluid_solver, momentum_terms, initial_fields, fluid_diagnostics)
 !> on 2 ranks: projection to round-off, Taylor-Green spatial and temporal order, inviscid energy
 !> conservation, and the discrete energy budget dE/dt = -dissipation.
-!> References: the exact Taylor-Green solution (physics.md section 2, Taylor & Green 1937);
+!> References: the exact Taylor-Green solution (docs/physics.md section 2, Taylor & Green 1937);
 !> the scheme's design order 2 in dx and dt; energy conservation of the divergence-form MAC
 !> advection (Morinishi et al. 1998), so the only energy error left is AB2's.
 program test_fluid_solver

@@ -3,7 +3,7 @@
 !>
 !> Without arguments (the test suite):
 !>  - power balance: in the statistically stationary state the mean power input <f.u> equals the
-!>    mean dissipation nu <|grad u|^2> (physics.md section 3: "check <f.u> against the measured
+!>    mean dissipation nu <|grad u|^2> (docs/physics.md section 3: "check <f.u> against the measured
 !>    dissipation"; the discrete kinetic energy obeys dk/dt = <f.u> - epsilon, flow_statistics).
 !>    Tolerance 5% (issue 3). The averaging window is 0.6 s = 60 T_L after a 0.15 s transient
 !>    (6 viscous times 1/(nu kappa0^2) = 0.025 s of the forced scale).
@@ -32,7 +32,7 @@ program test_forced_box
 
   call parallel_start()
   cfg%time_scale = 0.01_wp
-  cfg%target_dissipation = 8.0e-3_wp      ! the paper's box, physics.md section 3 (rough figure)
+  cfg%target_dissipation = 8.0e-3_wp      ! the paper's box, docs/physics.md section 3 (rough figure)
   mode = ''
   if (command_argument_count() >= 2) then
     call get_command_argument(1, mode)

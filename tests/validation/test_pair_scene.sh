@@ -23,7 +23,7 @@ common="&run seed = 3, dt = 2.0e-7, end_time = 0.02, progress_interval = 100000 
 &output stats_interval = 1000 /"
 
 # 1. Vacuum, no DLVO, spheres head-on: contact after gap / v exactly (to one step), restitution exactly e.
-#    Reference: kinematics; Poisson restitution for a head-on sphere collision (physics.md section 6).
+#    Reference: kinematics; Poisson restitution for a head-on sphere collision (docs/physics.md section 6).
 if run spheres_vacuum 1 "$common
 &scene fluid = 'none', particles = 'pair', dlvo = .false. /
 &pair shape = 'sphere', gap = 5.0e-6, relative_speed = 0.875e-3 /
@@ -35,7 +35,7 @@ if run spheres_vacuum 1 "$common
 fi
 
 # 2. Stokes drag, spheres, no DLVO: each sphere decays with tau = m / (6 pi mu r) = 2 r^2 rho_p / (9 mu),
-#    so the gap closes by v tau and the pair never touches (physics.md section 7, energy scale).
+#    so the gap closes by v tau and the pair never touches (docs/physics.md section 7, energy scale).
 if run spheres_stokes 1 "&run seed = 3, dt = 2.0e-7, end_time = 0.03, progress_interval = 100000 /
 &output stats_interval = 1000 /
 &scene fluid = 'stokes', particles = 'pair', dlvo = .false. /
