@@ -41,7 +41,7 @@ contains
     character(len=512) :: message
     call to_namelist(cfg)
     read(deck%lines, nml=collision, iostat=ios, iomsg=message)
-    call check_namelist_read('collision', ios, message)
+    call check_namelist_read(deck, 'collision', ios, message)
     call from_namelist(cfg)
   end subroutine read_collision_group
 

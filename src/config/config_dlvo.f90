@@ -52,7 +52,7 @@ contains
     character(len=512) :: message
     call to_namelist(cfg)
     read(deck%lines, nml=dlvo, iostat=ios, iomsg=message)
-    call check_namelist_read('dlvo', ios, message)
+    call check_namelist_read(deck, 'dlvo', ios, message)
     call from_namelist(cfg)
   end subroutine read_dlvo_group
 

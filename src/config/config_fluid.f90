@@ -47,7 +47,7 @@ contains
     character(len=512) :: message
     call to_namelist(cfg)
     read(deck%lines, nml=fluid, iostat=ios, iomsg=message)
-    call check_namelist_read('fluid', ios, message)
+    call check_namelist_read(deck, 'fluid', ios, message)
     call from_namelist(cfg)
   end subroutine read_fluid_group
 

@@ -66,7 +66,7 @@ contains
     character(len=512) :: message
     call to_namelist(cfg)
     read(deck%lines, nml=forcing, iostat=ios, iomsg=message)
-    call check_namelist_read('forcing', ios, message)
+    call check_namelist_read(deck, 'forcing', ios, message)
     call from_namelist(cfg)
   end subroutine read_forcing_group
 

@@ -38,7 +38,7 @@ contains
     character(len=512) :: message
     call to_namelist(cfg)
     read(deck%lines, nml=grid, iostat=ios, iomsg=message)
-    call check_namelist_read('grid', ios, message)
+    call check_namelist_read(deck, 'grid', ios, message)
     call from_namelist(cfg)
   end subroutine read_grid_group
 

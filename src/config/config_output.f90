@@ -40,7 +40,7 @@ contains
     character(len=512) :: message
     call to_namelist(cfg)
     read(deck%lines, nml=output, iostat=ios, iomsg=message)
-    call check_namelist_read('output', ios, message)
+    call check_namelist_read(deck, 'output', ios, message)
     call from_namelist(cfg)
   end subroutine read_output_group
 

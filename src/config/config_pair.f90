@@ -67,7 +67,7 @@ contains
     character(len=512) :: message
     call to_namelist(cfg)
     read(deck%lines, nml=pair, iostat=ios, iomsg=message)
-    call check_namelist_read('pair', ios, message)
+    call check_namelist_read(deck, 'pair', ios, message)
     call from_namelist(cfg)
   end subroutine read_pair_group
 

@@ -55,7 +55,7 @@ contains
     character(len=512) :: message
     call to_namelist(cfg)
     read(deck%lines, nml=run, iostat=ios, iomsg=message)
-    call check_namelist_read('run', ios, message)
+    call check_namelist_read(deck, 'run', ios, message)
     call from_namelist(cfg)
   end subroutine read_run_group
 

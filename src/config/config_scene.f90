@@ -42,7 +42,7 @@ contains
     character(len=512) :: message
     call to_namelist(cfg)
     read(deck%lines, nml=scene, iostat=ios, iomsg=message)
-    call check_namelist_read('scene', ios, message)
+    call check_namelist_read(deck, 'scene', ios, message)
     call from_namelist(cfg)
   end subroutine read_scene_group
 

@@ -158,13 +158,43 @@ contains
     end do
   end function lower
 
-  !> Turn a failed namelist read into a deck error naming the group.
-  subroutine check_namelist_read(group, ios, message)
+  !> Turn a failed namelist read into a deck error naming the group and where it stands.
+  subroutine check_namelist_read(deck, group, ios, message)
+    type(deck_t), intent(in) :: deck
     character(len=*), intent(in) :: group, message
     integer, intent(in) :: ios
-    if (ios > 0) call fatal('deck: cannot read namelist group &'//trim(group)//': '//trim(message)// &
+    if (ios > 0) call fatal('deck: cannot read namelist group &'//trim(group)//' ('//group_lines(deck, group)// &
+        ' of '//deck%path//'): '//trim(message)// &
         ' (an unknown variable name, a value of the wrong type, or a missing quote; see docs/decks.md)')
   end subroutine check_namelist_read
+
+  !> "lines 3-7": where group opens and closes in the deck.
+  function group_lines(deck, group) result(text)
+    type(deck_t), intent(in) :: deck
+    character(len=*), intent(in) :: group
+    character(len=:), allocatable :: text
+    character(len=64) :: name
+    integer :: i, first, last
+    logical :: inside, in_group
+    first = 0
+    last = 0
+    inside = .false.
+    in_group = .false.
+    do i = 1, size(deck%lines)
+      call scan_line(deck%lines(i), inside, name)
+      if (name == lower(group)) then
+        first = i
+        in_group = .true.
+      end if
+      if (in_group) last = i
+      if (in_group .and. .not. inside) exit
+    end do
+    if (first == last) then
+      text = 'line '//int_text(first)
+    else
+      text = 'lines '//int_text(first)//'-'//int_text(last)
+    end if
+  end function group_lines
 
   subroutine require_positive(group, variable, value)
     character(len=*), intent(in) :: group, variable
