@@ -18,8 +18,10 @@
 !>      copy), and with explicit diffusion div u* / dt goes straight into the FFT buffer one plane
 !>      behind (the plane just computed is still in cache);
 !>   2. Poisson solve in the FFT buffer (no copies in or out);
-!>   3. correction sweep: u^{n+1} = u* - dt grad phi read from the FFT buffer, the pressure, and the
-!>      x-y halos of u, v, w; then one z-halo message per direction for all three components.
+!>   3. correction sweep: u^{n+1} = u* - dt grad phi in place in the u* arrays, phi read from the FFT
+!>      buffer, the pressure, and the x-y halos; the arrays then rotate (u* -> u, E^n -> E^{n-1},
+!>      u^n -> scratch; move_alloc, nothing copied) and one z-halo message per direction carries
+!>      all three components.
 !> The two single-plane halo messages (w* below, phi above) are in flight while interior planes
 !> are computed.
 module fluid_solver
@@ -176,14 +178,15 @@ contains
 
     call project(solver, dt)
 
-    ! E^n becomes E^{n-1}; the u* arrays become next step's E^n scratch (swapping the
-    ! allocations: nothing is copied or allocated).
-    call move_alloc(solver%explicit_old_u, swap); call move_alloc(solver%explicit_u, solver%explicit_old_u)
-    call move_alloc(swap, solver%explicit_u)
-    call move_alloc(solver%explicit_old_v, swap); call move_alloc(solver%explicit_v, solver%explicit_old_v)
-    call move_alloc(swap, solver%explicit_v)
-    call move_alloc(solver%explicit_old_w, swap); call move_alloc(solver%explicit_w, solver%explicit_old_w)
-    call move_alloc(swap, solver%explicit_w)
+    ! The corrected u* arrays become u^{n+1}, E^n becomes E^{n-1}, and u^n's arrays become next
+    ! step's E^n scratch (moving the allocations: nothing is copied or allocated).
+    call rotate(solver%u, solver%explicit_old_u, solver%explicit_u)
+    call rotate(solver%v, solver%explicit_old_v, solver%explicit_v)
+    call rotate(solver%w, solver%explicit_old_w, solver%explicit_w)
+    ! correction_plane refreshed the x-y halos; the z halos of u, v, w go in one message each way.
+    t1 = wall_time()
+    call exchange_z_halos(solver%grid%slab, solver%u, solver%v, solver%w)
+    solver%timers(timer_halo) = solver%timers(timer_halo) + wall_time() - t1
     solver%dt_old = dt
     solver%has_history = .true.
     solver%time = solver%time + dt
@@ -204,6 +207,15 @@ contains
       end do
     end subroutine keep_divergence
 
+    !> velocity <- corrected (u^{n+1}), history <- explicit_now (E^n), explicit_now <- old velocity.
+    subroutine rotate(velocity, history, explicit_now)
+      real(wp), allocatable, intent(inout) :: velocity(:, :, :), history(:, :, :), explicit_now(:, :, :)
+      call move_alloc(velocity, swap)
+      call move_alloc(history, velocity)
+      call move_alloc(explicit_now, history)
+      call move_alloc(swap, explicit_now)
+    end subroutine rotate
+
     subroutine predictor(k)
       integer, intent(in) :: k
       call predictor_plane(solver%grid, k, c, solver%u, solver%v, solver%w, &
@@ -213,9 +225,9 @@ contains
   end subroutine fluid_advance
 
   !> Projection: the FFT buffer holds div u* / dt (interior) and explicit_old_* hold u*. Solve
-  !> L phi = div u* / dt in the buffer, set u^{n+1} = u* - dt grad phi and the pressure, and
-  !> refresh the velocity halos. The plane of phi above the slab travels while the other planes
-  !> are corrected.
+  !> L phi = div u* / dt in the buffer, set u^{n+1} = u* - dt grad phi in place (with the x-y
+  !> halos) and the pressure. The plane of phi above the slab travels while the other planes are
+  !> corrected.
   subroutine project(solver, dt)
     type(fluid_solver_t), intent(inout) :: solver
     real(wp), intent(in) :: dt
@@ -235,10 +247,6 @@ contains
     call finish_plane_shift(solver%grid%slab, solver%phi_above, upward=.false.)
     halo = halo + wall_time() - t1
     call correct(nzl, solver%phi_above)
-    ! correction_plane refreshed the x-y halos; the z halos of u, v, w go in one message each way.
-    t1 = wall_time()
-    call exchange_z_halos(solver%grid%slab, solver%u, solver%v, solver%w)
-    halo = halo + wall_time() - t1
     solver%timers(timer_poisson) = solver%timers(timer_poisson) + wall_time() - t0 - halo
     solver%timers(timer_halo) = solver%timers(timer_halo) + halo
 
@@ -252,8 +260,7 @@ contains
       integer :: i, j, nx
       nx = solver%grid%nx
       call correction_plane(solver%grid, k, solver%poisson%real_view(:, :, k), phi_next, dt, &
-                            solver%explicit_old_u, solver%explicit_old_v, solver%explicit_old_w, &
-                            solver%u, solver%v, solver%w)
+                            solver%explicit_old_u, solver%explicit_old_v, solver%explicit_old_w)
       if (solver%crank_nicolson) then
         do j = 1, solver%grid%ny
           do i = 1, nx

@@ -146,16 +146,16 @@ contains
     end do
   end subroutine divergence_plane
 
-  !> Plane k of the projection: u = u* - factor grad phi on the faces (interior), then the plane's
-  !> x-y halo ring of u, v, w from its periodic images. phi_here and phi_above are the potential on
-  !> planes k and k+1 in the FFT's padded layout (first extent >= nx), with no halos: the periodic
-  !> neighbours i = nx+1 -> 1 and j = ny+1 -> 1 are taken by index.
-  subroutine correction_plane(grid, k, phi_here, phi_above, factor, star_u, star_v, star_w, u, v, w)
+  !> Plane k of the projection, in place: u = u* - factor grad phi on the faces (interior), then
+  !> the plane's x-y halo ring from its periodic images. phi_here and phi_above are the potential
+  !> on planes k and k+1 in the FFT's padded layout (first extent >= nx), with no halos: the
+  !> periodic neighbours i = nx+1 -> 1 and j = ny+1 -> 1 are taken by index. In place because
+  !> writing a separate output array would cost the memory traffic of reading it first.
+  subroutine correction_plane(grid, k, phi_here, phi_above, factor, u, v, w)
     type(fluid_grid_t), intent(in) :: grid
     integer, intent(in) :: k
     real(wp), intent(in), contiguous :: phi_here(:, :), phi_above(:, :)
     real(wp), intent(in) :: factor
-    real(wp), intent(in), contiguous :: star_u(0:, 0:, 0:), star_v(0:, 0:, 0:), star_w(0:, 0:, 0:)
     real(wp), intent(inout), contiguous :: u(0:, 0:, 0:), v(0:, 0:, 0:), w(0:, 0:, 0:)
     integer :: i, j, j_next, nx, ny
     real(wp) :: cx, cy, cz
@@ -164,12 +164,12 @@ contains
     do j = 1, ny
       j_next = merge(1, j + 1, j == ny)
       do i = 1, nx - 1
-        u(i, j, k) = star_u(i, j, k) - cx * (phi_here(i + 1, j) - phi_here(i, j))
+        u(i, j, k) = u(i, j, k) - cx * (phi_here(i + 1, j) - phi_here(i, j))
       end do
-      u(nx, j, k) = star_u(nx, j, k) - cx * (phi_here(1, j) - phi_here(nx, j))
+      u(nx, j, k) = u(nx, j, k) - cx * (phi_here(1, j) - phi_here(nx, j))
       do i = 1, nx
-        v(i, j, k) = star_v(i, j, k) - cy * (phi_here(i, j_next) - phi_here(i, j))
-        w(i, j, k) = star_w(i, j, k) - cz * (phi_above(i, j) - phi_here(i, j))
+        v(i, j, k) = v(i, j, k) - cy * (phi_here(i, j_next) - phi_here(i, j))
+        w(i, j, k) = w(i, j, k) - cz * (phi_above(i, j) - phi_here(i, j))
       end do
       ! Periodic x images of this row (cache-hot now; a separate pass would stride through memory).
       u(0, j, k) = u(nx, j, k); u(nx + 1, j, k) = u(1, j, k)
