@@ -7,6 +7,7 @@ MODE  ?= release
 NP    ?= 2
 BUILD ?= build
 DECK  ?= input/default.nml
+VENV  ?= .venv
 
 FC := mpifort
 CC := mpicc
@@ -121,9 +122,23 @@ run: deps ## install, build, and run DECK (default input/default.nml) on NP rank
 	@$(MAKE) --no-print-directory build
 	$(MPIRUN) -np $(NP) $(BUILD)/agglo $(DECK)
 
-test: deps ## install, build, and run every test (closing line "N passed, N failed")
+test: deps tools-deps ## install, build, and run every test (closing line "N passed, N failed")
 	@$(MAKE) --no-print-directory build $(TEST_PROGRAMS)
 	@BUILD=$(BUILD) tests/run_tests.sh
+
+# The Python tools (tools/agglo-stats, tests/python) run in a venv made with Debian's python3
+# (python3 on PATH may be another interpreter); the stamp makes a second call silent.
+PYTHON3 := $(firstword $(wildcard /usr/bin/python3) python3)
+tools-deps: deps $(VENV)/.requirements-installed ## install the Python tools' packages into .venv
+	@:
+
+$(VENV)/.requirements-installed: tools/requirements.txt
+	@[ -x $(VENV)/bin/python ] || $(PYTHON3) -m venv $(VENV) \
+	  || { echo "tools-deps: '$(PYTHON3) -m venv' failed (Debian package python3-venv)" >&2; exit 1; }
+	@echo "tools-deps: installing tools/requirements.txt into $(VENV)"
+	@$(VENV)/bin/python -m pip install -q -r tools/requirements.txt \
+	  || { echo "tools-deps: pip could not install tools/requirements.txt into $(VENV)" >&2; exit 1; }
+	@touch $@
 
 bench: deps ## run the benchmarks (results for docs/performance.md)
 	@$(MAKE) --no-print-directory build $(BENCH_PROGRAMS)

@@ -7,16 +7,55 @@ set -eu
 cd "$(dirname "$0")/.."
 BUILD=${BUILD:-build}
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
-make --no-print-directory -s build "$BUILD/bench/bench_fluid"
+make --no-print-directory -s build "$BUILD/bench/bench_fluid" "$BUILD/bench/bench_pair" \
+  "$BUILD/bench/bench_forcing"   # [forcing]
 work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
 exe=$PWD/$BUILD/bench/bench_fluid
+pair_exe=$PWD/$BUILD/bench/bench_pair
+forcing_exe=$PWD/$BUILD/bench/bench_forcing   # [forcing]
+agglo=$PWD/$BUILD/agglo
+parts=${BENCH_PARTS:-fluid pair forcing}   # e.g. BENCH_PARTS=pair make bench
 echo "Agglo fluid benchmark on $(nproc) cores: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')"
-echo "compiler: $(mpifort --version | head -n 1); flags: -O3 -march=native -funroll-loops; FFTW_ESTIMATE plans"
+echo "compiler: $(mpifort --version | head -n 1); flags: -O3 -march=native -funroll-loops$(grep -q avx512f /proc/cpuinfo && echo ' (momentum_terms: -mprefer-vector-width=512)'); FFTW_ESTIMATE plans"
 echo "    N  R  fft_pair   poisson      step  adv+diff   proj(P)      halo    io(4f) pois(copy)  [ms, medians]  ns/pt/step  poisson/fft  step/fft"
+if [[ $parts == *fluid* ]]; then
 for n in 64 128; do
   steps=$(( n == 64 ? 40 : 15 ))
   for ranks in 1 2; do
     line=$(cd "$work" && mpirun -np $ranks "$exe" $n $steps)
     echo "$line" | awk -v n=$n '{ printf "%s  %10.1f  %11.2f  %8.2f\n", $0, $5 * 1e6 / (n^3), $4 / $3, $5 / $3 }'
   done
+done
+fi
+
+# [forcing] Eswaran-Pope forcing per step against a whole Crank-Nicolson fluid step (input/hit_box.nml);
+# target <= 10% (issue 3). Means over 20 (64^3) or 5 (128^3) repetitions, slowest rank.
+if [[ $parts == *forcing* ]]; then
+  echo
+  echo "Forcing:    N  R  forcing_ms   step_ms  percent"
+  for n in 64 128; do
+    for ranks in 1 2; do
+      echo "         $(cd "$work" && mpirun -np $ranks "$forcing_exe" $n $(( n == 64 ? 20 : 5 )) | tail -n 1)"
+    done
+  done
+fi
+
+[[ $parts == *pair* ]] || exit 0
+
+# Particle pair: cost of one particle step by part, and the wall time of one paper-protocol run
+# (input/quiescent_*.nml, seed 1, 1 rank) at each cheap fidelity.
+echo
+echo "Pair step (quiescent disk pair, warm-started closest points), medians of 5 x 100000 steps:"
+(cd "$work" && mpirun -np 1 "$pair_exe" 100000)
+echo
+echo "One quiescent paper-protocol run (seed 1, 1 rank): shape fidelity steps wall_s us/step outcome"
+for deck in input/quiescent_{needle,disk,sphere}_{none,stokes}.nml; do
+  name=$(basename "$deck" .nml)
+  sed -e "s|^  name = .*|  name = 'bench'|" "$deck" > "$work/$name.nml"
+  (cd "$work" && mpirun -np 1 "$agglo" "$name.nml" > "$name.log" 2>&1)
+  python3 - "$work/output/bench/summary.json" "$name" <<'PY'
+import json, sys
+d = json.load(open(sys.argv[1]))
+print(f"{sys.argv[2]:28s} {d['steps']:7d} {d['wall_time']:7.2f} {1e6 * d['wall_time'] / d['steps']:6.1f} {d['outcome']}")
+PY
 done

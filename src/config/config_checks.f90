@@ -4,6 +4,7 @@ module config_checks
   use agglo_kinds, only: wp
   use agglo_config, only: agglo_config_t
   use deck_file, only: int_text, real_text
+  use config_forcing, only: forcing_mode_extent
   use error_handling, only: input_error, fatal
   implicit none
   private
@@ -32,6 +33,9 @@ contains
     if (cfg%scene%fluid /= 'resolved' .and. cfg%run%dt_mode /= 'fixed') call input_error('run', 'dt_mode', &
         ''''//trim(cfg%run%dt_mode)//''' with fluid = '''//trim(cfg%scene%fluid)//'''', &
         '''fixed'' (the CFL number is a property of the resolved fluid)')
+    if (cfg%scene%fluid /= 'resolved' .and. cfg%run%restart) call input_error('run', 'restart', &
+        '.true. with fluid = '''//trim(cfg%scene%fluid)//'''', &
+        '.false. (pair scenes run in about a second and write no checkpoints: run them again)')
   end subroutine check_scene_combinations
 
   !> Resolved fluid: the grid must split into equal slabs along z and y (pencil transposes of the FFT).
@@ -79,10 +83,28 @@ contains
         'for the estimated peak velocity of the initial field (or set dt_mode = ''cfl'')')
   end subroutine check_fluid_time_step
 
+  !> Forcing: only of a resolved fluid; the forced modes must be representable on the grid; the
+  !> Euler-Maruyama form (paper Eq. 3) needs dt <= T_L (its decay factor 1 - dt/T_L turns negative).
   subroutine check_forcing_cross(cfg)
     type(agglo_config_t), intent(in) :: cfg
+    integer :: extent(3), cells(3), d
+    real(wp) :: lengths(3)
+    character(len=1), parameter :: axis(3) = ['x', 'y', 'z']
     if (cfg%scene%fluid /= 'resolved') call input_error('scene', 'forcing', ''''//trim(cfg%scene%forcing)// &
-        ''' with fluid = '''//trim(cfg%scene%fluid)//'''', '''none'' unless fluid = ''resolved''')
+        ''' with fluid = '''//trim(cfg%scene%fluid)//'''', '''none'' unless fluid = ''resolved'' '// &
+        '(the forcing drives the resolved fluid; a fluid-free or Stokes scene has no velocity field)')
+    lengths = [cfg%grid%length_x, cfg%grid%length_y, cfg%grid%length_z]
+    cells = [cfg%grid%nx, cfg%grid%ny, cfg%grid%nz]
+    extent = forcing_mode_extent(cfg%forcing%kappa_f_ratio, lengths)
+    do d = 1, 3
+      if (2 * extent(d) >= cells(d)) call input_error('forcing', 'kappa_f_ratio', &
+          real_text(cfg%forcing%kappa_f_ratio), 'a cut-off whose modes lie below the grid''s Nyquist '// &
+          'wavenumber: it forces |n_'//axis(d)//'| up to '//int_text(extent(d))//', which needs n'//axis(d)// &
+          ' > '//int_text(2 * extent(d))//' cells (n'//axis(d)//' = '//int_text(cells(d))//')')
+    end do
+    if (cfg%forcing%update == 'euler_maruyama' .and. cfg%run%dt > cfg%forcing%time_scale) call input_error( &
+        'forcing', 'update', '''euler_maruyama'' with &run dt = '//real_text(cfg%run%dt)//' s > time_scale = '// &
+        real_text(cfg%forcing%time_scale)//' s', '''exact'' (any dt), or euler_maruyama with dt <= time_scale')
   end subroutine check_forcing_cross
 
   !> Particle models: the nanometre-scale lengths must be far below the particle size (the DLVO and

@@ -21,7 +21,8 @@ contains
     character(len=16) :: text
     integer :: h, m, s
     if (seconds < 60.0_wp) then
-      write(text, '(f0.1,a)') max(seconds, 0.0_wp), 's'
+      write(text, '(f4.1,a)') max(seconds, 0.0_wp), 's'
+      text = adjustl(text)
     else
       s = nint(seconds)
       h = s / 3600

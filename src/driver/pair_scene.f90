@@ -5,6 +5,7 @@
 !> twice the first-collision time (&pair mirror_first_collision, the paper's protocol).
 module pair_scene
   use agglo_kinds, only: wp, i8
+  use vector_algebra, only: cross
   use agglo_config, only: agglo_config_t
   use error_handling, only: fatal
   use logger, only: log_line
@@ -288,9 +289,4 @@ contains
     call log_line(trim(line))
   end subroutine log_pair
 
-  pure function cross(a, b) result(c)
-    real(wp), intent(in) :: a(3), b(3)
-    real(wp) :: c(3)
-    c = [a(2) * b(3) - a(3) * b(2), a(3) * b(1) - a(1) * b(3), a(1) * b(2) - a(2) * b(1)]
-  end function cross
 end module pair_scene

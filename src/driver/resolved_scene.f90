@@ -17,6 +17,8 @@ module resolved_scene
   use time_step_control, only: next_time_step, explicit_viscous_limit
   use fluid_restart, only: write_fluid_checkpoint, read_fluid_checkpoint, write_fluid_snapshot, read_initial_field
   use fluid_monitor, only: statistics_open, statistics_write, statistics_close, progress_line, timing_report
+  use forcing_driver, only: forcing_driver_t, forcing_driver_start, forced_fluid_advance, &      ! [forcing]
+                            forcing_driver_statistics, forcing_driver_state, forcing_driver_finish
   implicit none
   private
   public :: run_resolved_scene
@@ -27,11 +29,14 @@ contains
     type(agglo_config_t), intent(in) :: cfg
     type(fluid_solver_t) :: solver
     type(fluid_statistics_t) :: stats
+    type(forcing_driver_t) :: forcing   ! [forcing] Eswaran-Pope body force and flow statistics (inactive if off)
+    character(len=:), allocatable :: restart_path
     real(wp) :: dt, rate, viscous_limit, next_field_time, start_wall, step_wall, t0
     integer(i8) :: first_step
     logical :: finite
 
-    call start_fluid(cfg, solver)
+    call start_fluid(cfg, solver, restart_path)
+    call forcing_driver_start(forcing, cfg, solver, restart_path)                 ! [forcing]
     viscous_limit = huge(1.0_wp)
     if (.not. solver%crank_nicolson) viscous_limit = explicit_viscous_limit(solver%grid%dx, solver%grid%dy, &
                                                                             solver%grid%dz, solver%viscosity)
@@ -50,7 +55,7 @@ contains
       call advective_rate(solver, rate, finite)
       dt = next_time_step(cfg%run%dt_mode, cfg%run%dt, cfg%run%cfl_target, rate, viscous_limit, solver%time, &
                           cfg%run%end_time)
-      call fluid_advance(solver, dt)
+      call forced_fluid_advance(forcing, solver, dt)   ! [forcing] fluid_advance with f^n, then f^{n+1}
 
       call advective_rate(solver, rate, finite)
       if (.not. finite) call stop_run(solver, 'the velocity field is no longer finite (NaN or infinity) at step ')
@@ -60,6 +65,7 @@ contains
         call compute_fluid_statistics(solver, dt, stats)
         call statistics_write(solver%step, solver%time, dt, stats)
       end if
+      call forcing_driver_statistics(forcing, solver, cfg%fluid%viscosity)       ! [forcing]
       if (mod(solver%step, int(cfg%run%progress_interval, i8)) == 0) then
         call progress_line(solver%step, solver%time, dt, (wall_time() - step_wall) / cfg%run%progress_interval, &
             min(real(cfg%run%max_steps - solver%step, wp), (cfg%run%end_time - solver%time) / dt))
@@ -78,6 +84,7 @@ contains
     if (cfg%output%checkpoint_interval == 0 .or. &
         mod(solver%step, int(max(cfg%output%checkpoint_interval, 1), i8)) /= 0) call checkpoint(solver)
     call statistics_close()
+    call forcing_driver_finish(forcing, solver)                                        ! [forcing]
     call timing_report(solver, solver%step - first_step, wall_time() - start_wall)
     call log_line('resolved scene: '//trim(cfg%run%name)//' reached t = '//real_text(solver%time)//' s; '// &
         'time series '//run_file('fluid_statistics.dat')//', fields '//run_file('fields.xdmf')// &
@@ -95,7 +102,7 @@ contains
     subroutine checkpoint(solver)
       type(fluid_solver_t), intent(inout) :: solver
       t0 = wall_time()
-      call write_fluid_checkpoint(solver, cfg%output%checkpoints_kept)
+      call write_fluid_checkpoint(solver, cfg%output%checkpoints_kept, forcing_driver_state(forcing))  ! [forcing]
       solver%timers(timer_io) = solver%timers(timer_io) + wall_time() - t0
     end subroutine checkpoint
 
@@ -112,10 +119,11 @@ contains
   end subroutine run_resolved_scene
 
   !> Solver and initial state: the newest checkpoint on restart, else &fluid init.
-  subroutine start_fluid(cfg, solver)
+  subroutine start_fluid(cfg, solver, path)
     type(agglo_config_t), intent(in) :: cfg
     type(fluid_solver_t), intent(inout) :: solver
-    character(len=:), allocatable :: path
+    character(len=:), allocatable, intent(out) :: path   ! [forcing] the checkpoint restarted from ('' if none)
+    path = ''
     call fluid_solver_create(solver, cfg%grid%nx, cfg%grid%ny, cfg%grid%nz, cfg%grid%length_x, cfg%grid%length_y, &
         cfg%grid%length_z, cfg%fluid%viscosity, cfg%fluid%density, cfg%fluid%viscous_scheme, cfg%fluid%fft_planning)
     if (cfg%run%restart) then

@@ -6,6 +6,7 @@ module run_directory
   use error_handling, only: fatal, input_error
   use parallel_env, only: is_root, barrier
   use file_system, only: rename_file, file_exists, make_directory, delete_file
+  use directory_listing, only: list_directory, name_length
   implicit none
   private
   public :: prepare_run_directory, run_directory_path, run_file
@@ -31,7 +32,7 @@ contains
   subroutine prepare_run_directory(cfg)
     type(agglo_config_t), intent(in) :: cfg
     logical :: has_run, ok
-    integer :: status, unit, ios
+    integer :: unit, ios
     directory = trim(cfg%output%directory)
     if (len(directory) == 0) directory = 'output/'//trim(cfg%run%name)
     if (is_root()) then
@@ -49,15 +50,33 @@ contains
       open(newunit=unit, file=directory//'/.agglo_write_probe', status='replace', action='write', iostat=ios)
       if (ios /= 0) call input_error('output', 'directory', ''''//directory//'''', 'a writable directory')
       close(unit, status='delete')
-      if (cfg%run%overwrite .and. has_run .and. .not. cfg%run%restart) then
-        ! Replace the earlier run: its checkpoints must not be picked up by a later restart.
-        call execute_command_line('rm -rf "'//directory//'/checkpoints"', exitstat=status)
-        call delete_file(directory//'/agglo.log')
-      end if
+      if (cfg%run%overwrite .and. has_run .and. .not. cfg%run%restart) call remove_earlier_run()
       call write_run_deck(cfg)
     end if
     call barrier()
   end subroutine prepare_run_directory
+
+  !> Replace an earlier run: delete the files Agglo writes (and nothing else), so that its
+  !> checkpoints are not picked up by a later restart and its snapshots do not end up in the new
+  !> fields.xdmf.
+  subroutine remove_earlier_run()
+    character(len=name_length), allocatable :: names(:)
+    logical :: ok
+    integer :: i, status
+    call execute_command_line('rm -rf "'//directory//'/checkpoints"', exitstat=status)
+    call list_directory(directory, names, ok)
+    do i = 1, size(names)
+      if (is_run_output(names(i))) call delete_file(directory//'/'//trim(names(i)))
+    end do
+  end subroutine remove_earlier_run
+
+  !> The file names Agglo writes into a run directory (docs/outputs.md).
+  logical function is_run_output(name)
+    character(len=*), intent(in) :: name
+    character(len=*), parameter :: fixed(*) = [character(len=24) :: 'agglo.log', 'fields.xdmf', &
+        'fluid_statistics.dat', 'particles.h5', 'summary.json', 'flow_statistics.h5', 'run.nml']
+    is_run_output = any(fixed == name) .or. (index(name, 'fields_') == 1 .and. index(name, '.h5') > 0)
+  end function is_run_output
 
   !> run.nml: the fully resolved deck, written to a temporary name and renamed when complete.
   subroutine write_run_deck(cfg)

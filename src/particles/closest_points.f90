@@ -23,6 +23,7 @@
 !> an explicit failure report (converged = .false. and a message) instead of a silent wrong answer.
 module closest_points
   use agglo_kinds, only: wp
+  use vector_algebra, only: outer, cross
   use quaternion, only: rotation_matrix, symmetry_axis
   use spheroid, only: spheroid_t, surface_angles, implicit_function, normal_at_point
   implicit none
@@ -385,20 +386,5 @@ contains
     lambda_min = (a(1,1) * a(2,2) - a(1,2)**2) / lambda_max    ! avoids cancellation when lambda_min << lambda_max
     if (lambda_max <= 0.0_wp) lambda_min = mean - half_difference
   end subroutine symmetric_eigenvalues
-
-  pure function outer(u, v) result(m)
-    real(wp), intent(in) :: u(3), v(3)
-    real(wp) :: m(3,3)
-    integer :: j
-    do j = 1, 3
-      m(:, j) = u * v(j)
-    end do
-  end function outer
-
-  pure function cross(u, v) result(w)
-    real(wp), intent(in) :: u(3), v(3)
-    real(wp) :: w(3)
-    w = [u(2)*v(3) - u(3)*v(2), u(3)*v(1) - u(1)*v(3), u(1)*v(2) - u(2)*v(1)]
-  end function cross
 
 end module closest_points

@@ -21,6 +21,7 @@
 !>    strongly coupled K) the frictionless impulse is used and the result says so.
 module collision
   use agglo_kinds, only: wp
+  use vector_algebra, only: skew, cross
   use config_collision, only: collision_config_t
   use rigid_body, only: rigid_body_t, inverse_inertia_lab, point_velocity, set_angular_velocity_lab, &
                         angular_velocity_lab
@@ -254,18 +255,6 @@ contains
     body_energy = 0.5_wp * body%mass * dot_product(body%velocity, body%velocity) &
                   + 0.5_wp * sum(body%inertia_body * body%angular_velocity_body**2)
   end function body_energy
-
-  pure function skew(a) result(s)
-    real(wp), intent(in) :: a(3)
-    real(wp) :: s(3, 3)
-    s = reshape([0.0_wp, a(3), -a(2), -a(3), 0.0_wp, a(1), a(2), -a(1), 0.0_wp], [3, 3])
-  end function skew
-
-  pure function cross(a, b) result(c)
-    real(wp), intent(in) :: a(3), b(3)
-    real(wp) :: c(3)
-    c = [a(2) * b(3) - a(3) * b(2), a(3) * b(1) - a(1) * b(3), a(1) * b(2) - a(2) * b(1)]
-  end function cross
 
   !> Inverse of a 3x3 matrix by cofactors (K is symmetric positive definite: m > 0, I > 0).
   pure function inverse3(a) result(b)

@@ -8,6 +8,7 @@
 !> angular momentum is conserved. physics.md section 7 has every formula used here.
 module dlvo
   use agglo_kinds, only: wp
+  use vector_algebra, only: cross
   use physical_constants, only: pi, boltzmann_constant, elementary_charge, vacuum_permittivity
   use config_dlvo, only: dlvo_config_t
   use logger, only: log_line
@@ -286,12 +287,6 @@ contains
     torque1 = cross(point1 - centre1, force1)
     torque2 = cross(point2 - centre2, force2)
   end subroutine dlvo_pair_forces
-
-  pure function cross(a, b) result(c)
-    real(wp), intent(in) :: a(3), b(3)
-    real(wp) :: c(3)
-    c = [a(2) * b(3) - a(3) * b(2), a(3) * b(1) - a(1) * b(3), a(1) * b(2) - a(2) * b(1)]
-  end function cross
 
   !> Log every derived constant and the equal-sphere force at 5, 10 and 50 nm (chi_eta = 1).
   subroutine dlvo_log_constants(model)

@@ -7,6 +7,7 @@
 !> comes from this mesh: the mesh volume is smaller than the spheroid's (3.4% at 320 faces).
 module icosphere_mesh
   use agglo_kinds, only: wp
+  use vector_algebra, only: cross
   use spheroid, only: spheroid_t
   use error_handling, only: fatal
   implicit none
@@ -179,11 +180,5 @@ contains
       faces(:, n_faces) = [i, j, k]
     end subroutine add_face
   end subroutine subdivide
-
-  pure function cross(u, v) result(w)
-    real(wp), intent(in) :: u(3), v(3)
-    real(wp) :: w(3)
-    w = [u(2)*v(3) - u(3)*v(2), u(3)*v(1) - u(1)*v(3), u(1)*v(2) - u(2)*v(1)]
-  end function cross
 
 end module icosphere_mesh

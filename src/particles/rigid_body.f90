@@ -17,6 +17,7 @@
 !>    new loads -> rigid_body_kick(h/2) (velocity Verlet).
 module rigid_body
   use agglo_kinds, only: wp
+  use vector_algebra, only: cross
   use quaternion, only: quaternion_advance, rotation_matrix, rotate_to_lab, rotate_to_body, quaternion_normalise
   use error_handling, only: fatal
   use spheroid, only: spheroid_t
@@ -226,9 +227,4 @@ contains
     end do
   end subroutine rigid_body_substeps
 
-  pure function cross(a, b) result(c)
-    real(wp), intent(in) :: a(3), b(3)
-    real(wp) :: c(3)
-    c = [a(2) * b(3) - a(3) * b(2), a(3) * b(1) - a(1) * b(3), a(1) * b(2) - a(2) * b(1)]
-  end function cross
 end module rigid_body

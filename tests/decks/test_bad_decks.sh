@@ -87,3 +87,5 @@ expect_error pair_without_particles 1 "&run name = 'p' /
 &scene fluid = 'stokes' /" '&scene particles' "'pair'"
 expect_error resolved_with_pair 1 "&run name = 'p' /
 &scene fluid = 'resolved', particles = 'pair' /" 'immersed-boundary coupling'
+expect_error pair_scene_restart 1 "&run name = 'p', restart = .true. /
+&scene fluid = 'none', particles = 'pair' /" '&run restart' 'no checkpoints'

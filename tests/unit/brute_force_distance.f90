@@ -3,6 +3,7 @@
 !> Deliberately unrelated to the method of src/particles/closest_points.f90 (support functions).
 module brute_force_distance
   use agglo_kinds, only: wp
+  use vector_algebra, only: cross
   use physical_constants, only: pi
   use spheroid, only: spheroid_t
   implicit none
@@ -145,11 +146,5 @@ contains
         if (h < 1.0e-11_wp .or. (norm2(best_offset) < 1.0e-12_wp .and. h <= 1.0e-7_wp)) exit
       end do
     end function refine
-
-  pure function cross(a, b) result(c)
-    real(wp), intent(in) :: a(3), b(3)
-    real(wp) :: c(3)
-    c = [a(2)*b(3) - a(3)*b(2), a(3)*b(1) - a(1)*b(3), a(1)*b(2) - a(2)*b(1)]
-  end function cross
 
 end module brute_force_distance

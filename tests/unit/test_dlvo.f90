@@ -3,6 +3,7 @@
 !> torque balance, and finite values at the extremes.
 program test_dlvo
   use agglo_kinds, only: wp
+  use vector_algebra, only: cross
   use config_dlvo, only: dlvo_config_t
   use dlvo, only: dlvo_model_t, dlvo_setup, dlvo_force, dlvo_vdw_force, dlvo_edl_force, dlvo_energy, &
                   dlvo_pair_forces, chi_eta_eq14, chi_eta_derjaguin, alpha_sine_squared, curvature_factor, &
@@ -186,9 +187,4 @@ contains
     name = trim(adjustl(buffer))
   end function gap_name
 
-  pure function cross(a, b) result(c)
-    real(wp), intent(in) :: a(3), b(3)
-    real(wp) :: c(3)
-    c = [a(2) * b(3) - a(3) * b(2), a(3) * b(1) - a(1) * b(3), a(1) * b(2) - a(2) * b(1)]
-  end function cross
 end program test_dlvo

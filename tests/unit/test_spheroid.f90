@@ -4,6 +4,7 @@
 !> inverse map (incl. poles), the implicit function and the normal-to-point (support) map.
 program test_spheroid
   use agglo_kinds, only: wp, i8
+  use vector_algebra, only: cross
   use physical_constants, only: pi
   use random_stream, only: random_stream_t, stream_seed, stream_uniform, stream_normal
   use spheroid, only: spheroid_t, make_spheroid, surface_point, surface_normal, principal_curvatures, &
@@ -220,11 +221,5 @@ contains
       end do
     end do
   end subroutine curvature_finite_differences
-
-  pure function cross(u, v) result(w)
-    real(wp), intent(in) :: u(3), v(3)
-    real(wp) :: w(3)
-    w = [u(2)*v(3) - u(3)*v(2), u(3)*v(1) - u(1)*v(3), u(1)*v(2) - u(2)*v(1)]
-  end function cross
 
 end program test_spheroid

@@ -1,0 +1,470 @@
+"""agglo-stats: agglomeration statistics and the paper's figures from Monte-Carlo batches.
+
+Reads the run directories of one or more batches (tools/montecarlo.sh output roots, or any
+directory whose sub-directories are runs), in the layout of the pair scenes' per-run outputs
+(summary.json, particles.h5; docs/tools.md). Prints per group (shape, and fluid when batches of
+several fluids are read) the number of runs, the outcomes and the agglomeration rate with its
+Wilson score 95% interval; writes runs.csv (every run's summary), rates.csv and the figures.
+Run it through the launcher tools/agglo-stats (it picks the repository's .venv).
+"""
+import argparse
+import csv
+import json
+import math
+import os
+import sys
+
+OUTCOMES = ("agglomerated", "rebounded", "no_contact")
+# Two-sided 95% quantile of the standard normal distribution, Phi^{-1}(0.975).
+Z_95 = 1.959963984540054
+SUMMARY_KEYS = ("name", "seed", "shape", "aspect_ratio", "fluid", "outcome", "collisions",
+                "first_collision", "max_vdw_force", "final_gap", "final_relative_velocity",
+                "psi_final", "end_time", "steps", "wall_time")
+FIRST_COLLISION_KEYS = ("time", "theta1", "phi1", "theta2", "phi2", "psi",
+                        "normal_velocity_before", "normal_velocity_after")
+RUN_MARKERS = ("summary.json", "run.nml", "deck.nml", "agglo.log", "particles.h5", "FAILED")
+
+
+class BatchError(Exception):
+    """A batch that cannot give statistics (empty, nothing complete, unreadable)."""
+
+
+def wilson_interval(successes, trials, z=Z_95):
+    """Wilson score interval for a binomial proportion (Wilson 1927, J. Am. Stat. Assoc. 22:209;
+    Newcombe 1998, Stat. Med. 17:857, method 3):
+        centre = (p + z^2/(2n)) / (1 + z^2/n),
+        half   = z / (1 + z^2/n) * sqrt(p (1 - p)/n + z^2/(4 n^2)),   p = k/n.
+    Unlike the Wald interval it stays inside [0, 1] and is usable at k = 0 or k = n."""
+    if trials <= 0:
+        raise ValueError("the Wilson interval needs at least one trial")
+    if not 0 <= successes <= trials:
+        raise ValueError(f"successes {successes} outside [0, {trials}]")
+    p = successes / trials
+    z2 = z * z
+    denominator = 1.0 + z2 / trials
+    centre = (p + z2 / (2.0 * trials)) / denominator
+    half = z / denominator * math.sqrt(p * (1.0 - p) / trials + z2 / (4.0 * trials * trials))
+    return max(0.0, centre - half), min(1.0, centre + half)
+
+
+class Run:
+    """One complete run: where it is, which batch, and its summary."""
+
+    def __init__(self, directory, batch, summary):
+        self.directory = directory
+        self.batch = batch
+        self.summary = summary
+        self.group = ""
+
+    @property
+    def label(self):
+        return f"{os.path.basename(self.batch)}/{os.path.basename(self.directory)}"
+
+
+def _check_summary(summary):
+    """The reason a summary is unusable, or '' when it follows the agreed layout."""
+    if not isinstance(summary, dict):
+        return "summary.json is not a JSON object"
+    missing = [key for key in SUMMARY_KEYS if key not in summary]
+    if missing:
+        return "summary.json lacks " + ", ".join(missing)
+    if summary["outcome"] not in OUTCOMES:
+        return f"summary.json outcome '{summary['outcome']}' is not one of {', '.join(OUTCOMES)}"
+    first = summary["first_collision"]
+    if first is not None:
+        if not isinstance(first, dict) or any(key not in first for key in FIRST_COLLISION_KEYS):
+            return "summary.json first_collision lacks some of " + ", ".join(FIRST_COLLISION_KEYS)
+    return ""
+
+
+def find_run_directories(root):
+    """The run directories of a batch root: the root itself when it is a run, else its
+    sub-directories that hold any run file (RUN_MARKERS)."""
+    if not os.path.isdir(root):
+        raise BatchError(f"batch root '{root}' is not a directory")
+    if any(os.path.exists(os.path.join(root, marker)) for marker in RUN_MARKERS):
+        return [root]
+    runs = []
+    for entry in sorted(os.listdir(root)):
+        path = os.path.join(root, entry)
+        if os.path.isdir(path) and any(os.path.exists(os.path.join(path, m)) for m in RUN_MARKERS):
+            runs.append(path)
+    return runs
+
+
+def load_runs(roots):
+    """(complete runs, skipped [(directory, reason)]) of the batch roots.
+    Raises BatchError for a root without runs, or when no run at all is complete."""
+    complete, skipped = [], []
+    for root in roots:
+        directories = find_run_directories(root)
+        if not directories:
+            raise BatchError(f"batch root '{root}' holds no runs (no sub-directory with "
+                             f"{', '.join(RUN_MARKERS)}): is it the output root of a batch?")
+        for directory in directories:
+            path = os.path.join(directory, "summary.json")
+            if os.path.exists(os.path.join(directory, "FAILED")):
+                skipped.append((directory, "failed (see its FAILED file)"))
+                continue
+            if not os.path.exists(path):
+                skipped.append((directory, "incomplete (no summary.json)"))
+                continue
+            try:
+                with open(path) as handle:
+                    summary = json.load(handle)
+            except (OSError, ValueError) as error:
+                skipped.append((directory, f"summary.json unreadable: {error}"))
+                continue
+            reason = _check_summary(summary)
+            if reason:
+                skipped.append((directory, reason))
+                continue
+            complete.append(Run(directory, root, summary))
+    if not complete:
+        raise BatchError(f"no complete run in {', '.join(roots)}: {len(skipped)} run(s), all "
+                         "incomplete or failed (a complete run has summary.json)")
+    return complete, skipped
+
+
+def assign_groups(runs, group_by):
+    """Set run.group: by shape, by shape and fluid (the fluid only named when batches of
+    several fluids are read), or by batch root. Returns the group names in a stable order."""
+    fluids = {run.summary["fluid"] for run in runs}
+    for run in runs:
+        if group_by == "batch":
+            run.group = os.path.basename(os.path.normpath(run.batch))
+        elif group_by == "shape" or len(fluids) == 1:
+            run.group = run.summary["shape"]
+        else:
+            run.group = f"{run.summary['shape']}/{run.summary['fluid']}"
+    order = {"sphere": 0, "needle": 1, "disk": 2, "spheroid": 3}
+    return sorted({run.group for run in runs}, key=lambda g: (order.get(g.split("/")[0], 9), g))
+
+
+def rate_table(runs, groups):
+    """Rows of rates.csv: per group the counts and the agglomeration rate over all its runs."""
+    rows = []
+    for group in groups:
+        members = [run for run in runs if run.group == group]
+        counts = {outcome: sum(run.summary["outcome"] == outcome for run in members)
+                  for outcome in OUTCOMES}
+        low, high = wilson_interval(counts["agglomerated"], len(members))
+        rows.append({"group": group,
+                     "shape": ";".join(sorted({run.summary["shape"] for run in members})),
+                     "fluid": ";".join(sorted({run.summary["fluid"] for run in members})),
+                     "runs": len(members), **counts,
+                     "rate": counts["agglomerated"] / len(members),
+                     "wilson_low": low, "wilson_high": high})
+    return rows
+
+
+RUN_COLUMNS = ("batch", "run", "group", "name", "seed", "shape", "aspect_ratio", "fluid", "outcome",
+               "collisions", "first_collision_time", "theta1", "phi1", "theta2", "phi2", "psi",
+               "normal_velocity_before", "normal_velocity_after", "max_vdw_force", "final_gap",
+               "final_relative_velocity", "psi_final", "end_time", "steps", "wall_time")
+
+
+def run_row(run):
+    """One runs.csv row; the first-collision columns are empty for a run without contact."""
+    s = run.summary
+    first = s["first_collision"] or {}
+    row = {"batch": run.batch, "run": os.path.basename(run.directory), "group": run.group}
+    for key in ("name", "seed", "shape", "aspect_ratio", "fluid", "outcome", "collisions",
+                "max_vdw_force", "final_gap", "final_relative_velocity", "psi_final",
+                "end_time", "steps", "wall_time"):
+        row[key] = s[key]
+    row["first_collision_time"] = first.get("time", "")
+    for key in FIRST_COLLISION_KEYS[1:]:
+        row[key] = first.get(key, "")
+    return row
+
+
+def write_csv(path, columns, rows):
+    with open(path + ".tmp", "w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=columns)
+        writer.writeheader()
+        writer.writerows(rows)
+    os.replace(path + ".tmp", path)
+
+
+# ----------------------------------------------------------------------------------------------
+# Figures
+# ----------------------------------------------------------------------------------------------
+
+def _histories(run):
+    """(time, gap, relative velocity) arrays of a run's particles.h5, or None when absent."""
+    import h5py
+    import numpy as np
+    path = os.path.join(run.directory, "particles.h5")
+    if not os.path.exists(path):
+        return None
+    with h5py.File(path, "r") as h5:
+        return (np.asarray(h5["time"][:]), np.asarray(h5["pair/gap"][:]),
+                np.asarray(h5["pair/relative_velocity"][:]))
+
+
+def _save(figure, directory, stem):
+    paths = []
+    for extension in ("png", "pdf"):
+        path = os.path.join(directory, f"{stem}.{extension}")
+        figure.savefig(path, dpi=150 if extension == "png" else None, bbox_inches="tight")
+        paths.append(path)
+    return paths
+
+
+def _pdf_line(axis, values, bins, label, log_bins=False, color=None, style="-"):
+    """Plot a normalised histogram (an estimate of the PDF) as a step line."""
+    import numpy as np
+    values = np.asarray(values, dtype=float)
+    values = values[np.isfinite(values)]
+    if values.size == 0:
+        return False
+    if log_bins:
+        # Density per unit log10 of the quantity, drawn against the quantity on a log axis.
+        density, edges = np.histogram(np.log10(values), bins=np.log10(bins), density=True)
+        edges = 10.0 ** edges
+    else:
+        density, edges = np.histogram(values, bins=bins, density=True)
+    axis.stairs(density, edges, label=f"{label} (n = {values.size})", color=color, linestyle=style)
+    return True
+
+
+def _legend_or_note(axis, note="no data"):
+    """A legend when something was drawn, else a note in the middle of the empty axis."""
+    if axis.get_legend_handles_labels()[0]:
+        axis.legend(fontsize=7)
+    else:
+        axis.text(0.5, 0.5, note, transform=axis.transAxes, ha="center", va="center", color="0.4")
+
+
+def _log_bins(values, count=40):
+    import numpy as np
+    positive = np.concatenate([np.asarray(v, float)[np.asarray(v, float) > 0] for v in values])
+    if positive.size == 0:
+        return None
+    low, high = positive.min(), positive.max()
+    if high <= low:
+        low, high = low / 2.0, high * 2.0
+    return np.logspace(np.log10(low), np.log10(high), count + 1)
+
+
+def make_figures(runs, groups, directory, history_runs):
+    """Write every figure as PNG and PDF into directory; returns the paths written."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    colours = {group: f"C{k % 10}" for k, group in enumerate(groups)}
+    outcome_style = {"agglomerated": ("C3", "-"), "rebounded": ("C0", "--"),
+                     "no_contact": ("C7", ":")}
+    written = []
+
+    # 1-2. PDFs of surface separation and relative velocity over the runs' histories.
+    histories = {group: [] for group in groups}
+    for run in runs:
+        history = _histories(run)
+        if history is not None:
+            histories[run.group].append(history)
+    gaps = {g: np.concatenate([h[1] for h in histories[g]]) if histories[g] else np.empty(0)
+            for g in groups}
+    velocities = {g: np.concatenate([h[2] for h in histories[g]]) if histories[g] else np.empty(0)
+                  for g in groups}
+    figure, axis = plt.subplots(figsize=(6, 4))
+    bins = _log_bins(list(gaps.values()))
+    for group in groups:
+        if bins is None or gaps[group].size == 0:
+            continue
+        overlap = np.mean(gaps[group] <= 0.0) * 100.0
+        _pdf_line(axis, gaps[group][gaps[group] > 0.0], bins,
+                  f"{group}, overlap {overlap:.1f}% of samples", log_bins=True, color=colours[group])
+    axis.set_xscale("log")
+    axis.set_xlabel("surface separation h (m)")
+    axis.set_ylabel("PDF of log10 h")
+    axis.set_title("Surface separation over the runs' histories")
+    _legend_or_note(axis, "no particles.h5 histories")
+    written += _save(figure, directory, "separation_pdf")
+    plt.close(figure)
+
+    figure, axis = plt.subplots(figsize=(6, 4))
+    every = np.concatenate(list(velocities.values())) * 1.0e3
+    if every.size:
+        bins = np.linspace(every.min(), every.max() if every.max() > every.min() else every.min() + 1, 61)
+        for group in groups:
+            _pdf_line(axis, velocities[group] * 1.0e3, bins, group, color=colours[group])
+    axis.set_yscale("log")
+    axis.set_xlabel("normal relative velocity of the closest points (mm/s, > 0 approaching)")
+    axis.set_ylabel("PDF (s/mm)")
+    axis.set_title("Relative velocity over the runs' histories")
+    _legend_or_note(axis, "no particles.h5 histories")
+    written += _save(figure, directory, "relative_velocity_pdf")
+    plt.close(figure)
+
+    # 3. PDF of the maximum van der Waals force of each run.
+    forces = {g: np.array([r.summary["max_vdw_force"] for r in runs if r.group == g], float)
+              for g in groups}
+    figure, axis = plt.subplots(figsize=(6, 4))
+    bins = _log_bins(list(forces.values()), count=20)
+    if bins is not None:
+        for group in groups:
+            _pdf_line(axis, forces[group][forces[group] > 0.0], bins, group, log_bins=True,
+                      color=colours[group])
+    axis.set_xscale("log")
+    axis.set_xlabel("maximum van der Waals force of a run (N)")
+    axis.set_ylabel("PDF of log10 F")
+    axis.set_title("Maximum van der Waals force")
+    _legend_or_note(axis, "no positive force")
+    written += _save(figure, directory, "max_vdw_force_pdf")
+    plt.close(figure)
+
+    # 4. PDFs of psi at the first collision, agglomerated vs rebounded, one panel per group.
+    figure, axes = plt.subplots(1, len(groups), figsize=(4 * len(groups), 3.6), squeeze=False)
+    bins = np.linspace(0.0, 0.5 * math.pi, 10)
+    for axis, group in zip(axes[0], groups):
+        for outcome in ("agglomerated", "rebounded"):
+            psi = [r.summary["first_collision"]["psi"] for r in runs
+                   if r.group == group and r.summary["outcome"] == outcome
+                   and r.summary["first_collision"] is not None]
+            colour, style = outcome_style[outcome]
+            _pdf_line(axis, psi, bins, outcome, color=colour, style=style)
+        axis.set_title(group)
+        axis.set_xlabel("psi at the first collision (rad)")
+        axis.set_xlim(0.0, 0.5 * math.pi)
+        _legend_or_note(axis, "no collision in this group")
+    axes[0][0].set_ylabel("PDF (1/rad)")
+    figure.suptitle("Angle between the symmetry axes at contact")
+    written += _save(figure, directory, "psi_pdf")
+    plt.close(figure)
+
+    # 5. PDFs of the collision points (theta, phi) on each surface, split by outcome.
+    figure, axes = plt.subplots(len(groups), 2, figsize=(9, 3.2 * len(groups)), squeeze=False)
+    for row, group in enumerate(groups):
+        for column, (angle, bins) in enumerate((("theta", np.linspace(0.0, math.pi, 13)),
+                                                ("phi", np.linspace(-math.pi, math.pi, 25)))):
+            axis = axes[row][column]
+            for outcome in ("agglomerated", "rebounded"):
+                values = []
+                for r in runs:
+                    first = r.summary["first_collision"]
+                    if r.group == group and r.summary["outcome"] == outcome and first is not None:
+                        values += [first[angle + "1"], first[angle + "2"]]
+                colour, style = outcome_style[outcome]
+                _pdf_line(axis, values, bins, outcome, color=colour, style=style)
+            axis.set_xlabel(f"{angle} of the first collision point (rad), both particles")
+            axis.set_ylabel(f"{group}: PDF (1/rad)")
+            _legend_or_note(axis, "no collision in this group")
+    figure.suptitle("Collision points on the unrotated spheroid surfaces")
+    figure.tight_layout()
+    written += _save(figure, directory, "collision_points_pdf")
+    plt.close(figure)
+
+    # 6. Time histories of chosen runs.
+    figure, (top, bottom) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
+    for k, run in enumerate(history_runs):
+        history = _histories(run)
+        if history is None:
+            continue
+        time, gap, velocity = history
+        label = f"{run.label} ({run.group}, {run.summary['outcome']})"
+        top.plot(time * 1e3, gap, color=f"C{k % 10}", label=label)
+        bottom.plot(time * 1e3, velocity * 1e3, color=f"C{k % 10}")
+    top.set_yscale("symlog", linthresh=1.0e-9)
+    top.set_ylabel("surface separation h (m)")
+    _legend_or_note(top, "no particles.h5 in the chosen runs")
+    bottom.set_ylabel("relative velocity (mm/s)")
+    bottom.set_xlabel("time (ms)")
+    top.set_title("Histories of chosen runs")
+    written += _save(figure, directory, "histories")
+    plt.close(figure)
+    return written
+
+
+def choose_history_runs(runs, groups, requested):
+    """The runs named by --history (run directories or names), else per group the first
+    agglomerated and the first rebounded run (the first run when the group has neither)."""
+    if requested:
+        chosen = []
+        for wanted in requested:
+            path = os.path.realpath(wanted)
+            matches = [r for r in runs if os.path.realpath(r.directory) == path
+                       or os.path.basename(r.directory) == wanted or r.label == wanted]
+            if not matches:
+                raise BatchError(f"--history '{wanted}' is not a complete run of these batches")
+            chosen.append(matches[0])
+        return chosen
+    chosen = []
+    for group in groups:
+        members = [r for r in runs if r.group == group]
+        picked = [next((r for r in members if r.summary["outcome"] == outcome), None)
+                  for outcome in ("agglomerated", "rebounded")]
+        picked = [r for r in picked if r is not None] or members[:1]
+        chosen += picked
+    return chosen
+
+
+def print_rates(rows, stream):
+    width = max(12, max(len(row["group"]) for row in rows))
+    stream.write(f"{'group':<{width}} {'runs':>5} {'agglomerated':>12} {'rebounded':>9} "
+                 f"{'no_contact':>10} {'rate':>6}  Wilson 95% interval\n")
+    for row in rows:
+        stream.write(f"{row['group']:<{width}} {row['runs']:>5} {row['agglomerated']:>12} "
+                     f"{row['rebounded']:>9} {row['no_contact']:>10} {row['rate']:>6.3f}  "
+                     f"[{row['wilson_low']:.3f}, {row['wilson_high']:.3f}]\n")
+
+
+def parse_arguments(argv):
+    parser = argparse.ArgumentParser(
+        prog="agglo-stats",
+        description="Agglomeration statistics and figures of Agglo Monte-Carlo batches "
+                    "(output roots of tools/montecarlo.sh). Prints per group the runs, outcomes "
+                    "and the agglomeration rate (agglomerated / runs) with its Wilson score 95%% "
+                    "interval; writes runs.csv, rates.csv and the figures (PNG and PDF).",
+        epilog="Runs without summary.json (incomplete) or with a FAILED marker are skipped and "
+               "counted. Exit status: 0 done, 1 no usable run or unreadable input, 2 usage.")
+    parser.add_argument("roots", nargs="+", metavar="BATCH",
+                        help="batch output root (or a single run directory); several are merged")
+    parser.add_argument("-o", "--out", metavar="DIR",
+                        help="where the CSV files and figures go (default: BATCH/stats of the first)")
+    parser.add_argument("--group-by", choices=("shape", "shape+fluid", "batch"), default="shape+fluid",
+                        help="groups compared in the table and figures (default shape+fluid: the "
+                             "fluid is named only when the batches hold several fluids)")
+    parser.add_argument("--history", action="append", metavar="RUN", default=[],
+                        help="run (directory, or name like run_0007) whose time history is drawn; "
+                             "repeatable (default: first agglomerated and rebounded run per group)")
+    parser.add_argument("--no-figures", action="store_true", help="only the table and CSV files")
+    return parser.parse_args(argv)
+
+
+def main(argv=None):
+    arguments = parse_arguments(sys.argv[1:] if argv is None else argv)
+    try:
+        runs, skipped = load_runs(arguments.roots)
+        groups = assign_groups(runs, arguments.group_by)
+        rows = rate_table(runs, groups)
+        out = arguments.out or os.path.join(arguments.roots[0], "stats")
+        os.makedirs(out, exist_ok=True)
+        print_rates(rows, sys.stdout)
+        if skipped:
+            print(f"skipped {len(skipped)} run(s) of {len(skipped) + len(runs)}:")
+            for directory, reason in skipped[:20]:
+                print(f"  {directory}: {reason}")
+            if len(skipped) > 20:
+                print(f"  ... and {len(skipped) - 20} more")
+        write_csv(os.path.join(out, "runs.csv"), RUN_COLUMNS, [run_row(run) for run in runs])
+        write_csv(os.path.join(out, "rates.csv"), tuple(rows[0].keys()), rows)
+        print(f"wrote {os.path.join(out, 'runs.csv')} ({len(runs)} runs) and {os.path.join(out, 'rates.csv')}")
+        if not arguments.no_figures:
+            history_runs = choose_history_runs(runs, groups, arguments.history)
+            written = make_figures(runs, groups, out, history_runs)
+            print(f"wrote {len(written)} figure files in {out}")
+    except BatchError as error:
+        sys.stderr.write(f"agglo-stats: error: {error}\n")
+        return 1
+    except (OSError, KeyError) as error:
+        sys.stderr.write(f"agglo-stats: error: cannot read the batch: {error}\n")
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,502 @@
+#!/usr/bin/env bash
+# Monte-Carlo batches of Agglo runs: one base deck, many seeds, locally in parallel or as a Slurm
+# job array. Resumable; a failed run is recorded and the batch carries on. `--help` says how.
+# Needs bash >= 5.1 (wait -n -p) and coreutils only.
+set -uo pipefail
+export LC_ALL=C   # byte lengths and plain ASCII case mapping in the deck parser
+
+script_name=${0##*/}
+script_dir=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd -P)
+
+usage() {
+  cat <<EOF
+Usage: $script_name --deck FILE --runs N --seed S --out ROOT [options]
+
+Runs N copies of the base deck FILE that differ only in &run seed (S, S+1, ..., S+N-1) and name.
+Run i (1-based) lives in ROOT/run_NNNN (NNNN = i with 4 digits) with its own deck ROOT/run_NNNN/deck.nml:
+the base deck with &run name = 'run_NNNN', seed, overwrite = .true., restart = .false. and
+&output directory = ROOT/run_NNNN written into the deck's own &run and &output groups (added if the
+deck has none). The code draws the particles' orientations and positions from the seed.
+
+Required:
+  -d, --deck FILE        base deck (namelist file, e.g. input/<case>.nml)
+  -N, --runs N           number of runs in the batch (a later call may raise it to extend the batch)
+  -s, --seed S           seed of run 1; run i gets S+i-1
+  -o, --out ROOT         output root of the batch (created; spaces in the path are fine)
+
+Options:
+  -j, --jobs J           runs at the same time (default 1); with --slurm: at most J array tasks at once
+  -n, --ranks R          MPI ranks per run (default 1; R > 1 starts each run with the launcher)
+      --set G.V=VALUE    set variable V of group &G in every run, VALUE as written in a deck
+                         (e.g. --set run.end_time=2e-3 --set "scene.fluid='stokes'"); repeatable;
+                         part of the batch's base deck
+      --agglo PATH       the executable (default: \$AGGLO, else build/agglo of this repository)
+      --launcher CMD     MPI launcher for R > 1, words split on blanks (default "mpirun";
+                         with --slurm "srun"); called as CMD -n R AGGLO DECK
+      --time MINUTES     wall-time limit of one run: locally the run is stopped and recorded as
+                         failed; with --slurm the array task's --time (default there: 60)
+      --slurm            write ROOT/montecarlo.sbatch (one array task per incomplete run) and stop;
+                         submit it with: sbatch ROOT/montecarlo.sbatch
+      --sbatch-option O  extra "#SBATCH O" line, e.g. --sbatch-option --partition=short (repeatable)
+      --status           print how many runs are complete / failed / not run, run nothing
+  -h, --help             this text
+
+Resume: call the same command again. Complete runs (summary.json present, no FAILED marker) are
+skipped; incomplete, failed or interrupted runs start again from scratch (overwrite = .true.).
+The root keeps the batch's base deck (ROOT/batch.nml, with the --set values applied) and base seed
+(ROOT/batch.conf); a call with a different base deck or seed for the same root is refused.
+
+A run failed when the executable exits non-zero, or exits 0 without writing summary.json. Its
+directory then holds FAILED (the reason) next to stdout.log (everything the run printed) and the
+code's agglo.log; ROOT/failed.txt lists the failed runs of the last call. Runs start in the current
+directory, so relative paths inside the deck resolve from where you call this script.
+
+Exit status: 0 when every run of the batch is complete, 1 when some run failed or is incomplete,
+2 for a usage error or a refused root, 130 when interrupted (the interrupted runs are incomplete).
+EOF
+}
+
+die() { printf '%s: %s\n' "$script_name" "$1" >&2; exit "${2:-2}"; }
+say() { printf '%s: %s\n' "$script_name" "$*"; }
+
+if (( BASH_VERSINFO[0] < 5 || (BASH_VERSINFO[0] == 5 && BASH_VERSINFO[1] < 1) )); then
+  die "needs bash >= 5.1 (this is $BASH_VERSION)"
+fi
+
+# ---------------------------------------------------------------------------------------------
+# Deck rewriting. A namelist deck is text with groups "&name ... /"; inside a group, items are
+# "variable = value(s)" separated by blanks or commas; '!' starts a comment and quotes protect
+# strings (Fortran 2008, 10.11.3). deck_rewrite drops the assignments of every overridden variable
+# from its group and writes the new values just before the group's closing "/"; a group the deck
+# lacks is appended. Groups cannot be repeated (the code refuses a deck with a group twice).
+# Overrides: the global arrays override_keys ("group.variable", in order) and override_values.
+# The result is left in the global deck_out.
+# ---------------------------------------------------------------------------------------------
+declare -a override_keys=() override_values=()
+
+override_index() { # group.variable -> its index in override_keys, or -1
+  local k
+  for k in "${!override_keys[@]}"; do
+    [[ ${override_keys[k]} == "$1" ]] && { printf '%s' "$k"; return; }
+  done
+  printf '%s' -1
+}
+
+add_override() { # group variable value (later calls replace earlier values)
+  local key="${1,,}.${2,,}" k
+  k=$(override_index "$key")
+  if (( k >= 0 )); then override_values[k]=$3; else override_keys+=("$key"); override_values+=("$3"); fi
+}
+
+group_assignments() { # group [lines] -> " v1 = x, v2 = y " or, with "lines", "  v1 = x\n  v2 = y\n"
+  local k text='' sep=' '
+  for k in "${!override_keys[@]}"; do
+    if [[ ${override_keys[k]%%.*} == "$1" ]]; then
+      if [[ ${2:-} == lines ]]; then
+        text+="  ${override_keys[k]#*.} = ${override_values[k]}"$'\n'
+      else
+        text+="$sep${override_keys[k]#*.} = ${override_values[k]}"; sep=', '
+      fi
+    fi
+  done
+  [[ -n $text && ${2:-} != lines ]] && text+=' '
+  printf '%s' "$text"
+}
+
+deck_rewrite() { # deck text
+  local s=$1 n=${#1} i=0 j c prev=$'\n' quote='' group='' ident group_start=0
+  local inside=0 comment=0 dropping=0 seen=' '
+  deck_out=''
+  while (( i < n )); do
+    c=${s:i:1}
+    if [[ -n $quote ]]; then                       # inside a quoted string
+      (( dropping )) || deck_out+=$c
+      [[ $c == "$quote" ]] && quote=''
+      prev=$c; i=$((i + 1)); continue
+    fi
+    if (( comment )); then                         # '!' comment up to the end of the line
+      [[ $c == $'\n' ]] && comment=0
+      (( dropping )) || deck_out+=$c
+      prev=$c; i=$((i + 1)); continue
+    fi
+    case $c in
+      \'|\")
+        quote=$c ;;
+      '!')
+        comment=1 ;;
+      '&')
+        if (( ! inside )); then                    # a group opens: "&name"
+          j=$((i + 1))
+          while (( j < n )) && [[ ${s:j:1} == [A-Za-z0-9_] ]]; do j=$((j + 1)); done
+          group=${s:i+1:j-i-1}; group=${group,,}
+          seen+="$group "; inside=1
+          deck_out+=${s:i:j-i}; group_start=${#deck_out}; prev=${s:j-1:1}; i=$j; continue
+        fi ;;
+      '/')
+        if (( inside )); then                      # the group closes: new values go first
+          if [[ -z $(group_assignments "$group") ]]; then
+            :
+          elif [[ ${deck_out:group_start} == *$'\n'* ]]; then   # a group over several lines:
+            while [[ ${deck_out: -1} == [[:blank:]] ]]; do deck_out=${deck_out%?}; done
+            [[ ${deck_out: -1} == $'\n' ]] || deck_out+=$'\n'
+            deck_out+=$(group_assignments "$group" lines)$'\n'   # one item a line
+          else
+            deck_out+=$(group_assignments "$group")
+          fi
+          deck_out+=/
+          inside=0; dropping=0; prev=$c; i=$((i + 1)); continue
+        fi ;;
+      [A-Za-z])
+        if (( inside )) && [[ $prev == [[:space:],\;] ]]; then
+          # Is this the start of an item "variable [(subscript)] ="?
+          j=$i
+          while (( j < n )) && [[ ${s:j:1} == [A-Za-z0-9_%] ]]; do j=$((j + 1)); done
+          ident=${s:i:j-i}
+          while (( j < n )) && [[ ${s:j:1} == [[:space:]] ]]; do j=$((j + 1)); done
+          if [[ ${s:j:1} == '(' ]]; then
+            while (( j < n )) && [[ ${s:j:1} != ')' ]]; do j=$((j + 1)); done
+            j=$((j + 1))
+            while (( j < n )) && [[ ${s:j:1} == [[:space:]] ]]; do j=$((j + 1)); done
+          fi
+          if [[ ${s:j:1} == '=' ]]; then
+            if (( $(override_index "$group.${ident,,}") >= 0 )); then dropping=1; else dropping=0; fi
+          fi
+          (( dropping )) || deck_out+=$ident
+          prev=${ident: -1}; i=$((i + ${#ident})); continue
+        fi ;;
+    esac
+    (( dropping )) || deck_out+=$c
+    prev=$c; i=$((i + 1))
+  done
+  (( inside )) && return 1                         # unclosed group: let the caller say so
+  local k g appended=' '
+  for k in "${!override_keys[@]}"; do              # groups the deck does not have
+    g=${override_keys[k]%%.*}
+    [[ $seen == *" $g "* || $appended == *" $g "* ]] && continue
+    [[ -n $deck_out && ${deck_out: -1} != $'\n' ]] && deck_out+=$'\n'
+    deck_out+="&$g$(group_assignments "$g")/"$'\n'
+    appended+="$g "
+  done
+  return 0
+}
+
+fortran_string() { # text -> a Fortran string literal ('' doubles a quote)
+  local q="'"
+  printf "'%s'" "${1//$q/$q$q}"
+}
+
+# ---------------------------------------------------------------------------------------------
+# One run's result (also copied verbatim into the Slurm script, so both paths judge alike).
+# ---------------------------------------------------------------------------------------------
+record_run_result() { # run directory, exit status -> 0 complete, 1 failed (FAILED written)
+  local dir=$1 status=$2 reason=''
+  if [[ $status -eq 124 ]]; then reason="stopped at the time limit (exit status 124)"
+  elif [[ $status -ne 0 ]]; then reason="exit status $status"
+  elif [[ ! -f $dir/summary.json ]]; then reason="exited 0 but wrote no summary.json"
+  fi
+  if [[ -z $reason ]]; then rm -f "$dir/FAILED"; return 0; fi
+  # A summary from a run that then failed is not trusted: keep it aside, so resume reruns the run.
+  [[ -f $dir/summary.json ]] && mv -f "$dir/summary.json" "$dir/summary.json.rejected"
+  printf 'reason: %s\nfinished: %s\nlog: %s\n' "$reason" "$(date '+%Y-%m-%d %H:%M:%S')" \
+    "$dir/stdout.log" > "$dir/FAILED"
+  return 1
+}
+
+run_is_complete() { [[ -f $1/summary.json && ! -e $1/FAILED ]]; }
+
+now_ms() { local t=${EPOCHREALTIME/[.,]/}; printf '%s' $((10#$t / 1000)); }   # wall clock, milliseconds
+
+format_seconds() { # milliseconds -> "0.4s", "12s", "3m05s", "2h10m"
+  local ms=$1 t=$(($1 / 1000))
+  if (( ms < 10000 )); then printf '%d.%ds' $((ms / 1000)) $((ms % 1000 / 100)); return; fi
+  if (( t >= 3600 )); then printf '%dh%02dm' $((t / 3600)) $((t % 3600 / 60))
+  elif (( t >= 60 )); then printf '%dm%02ds' $((t / 60)) $((t % 60))
+  else printf '%ds' "$t"; fi
+}
+
+# ---------------------------------------------------------------------------------------------
+# Arguments
+# ---------------------------------------------------------------------------------------------
+deck='' runs='' base_seed='' root='' jobs=1 jobs_given=0 ranks=1 agglo=${AGGLO:-} launcher=''
+time_limit='' slurm=0 status_only=0
+declare -a sbatch_options=() user_sets=()
+need_value() { [[ $# -ge 2 ]] || die "option $1 needs a value (see --help)"; }
+while [[ $# -gt 0 ]]; do
+  case $1 in
+    -h|--help) usage; exit 0 ;;
+    -d|--deck) need_value "$@"; deck=$2; shift ;;
+    -N|--runs) need_value "$@"; runs=$2; shift ;;
+    -s|--seed) need_value "$@"; base_seed=$2; shift ;;
+    -o|--out) need_value "$@"; root=$2; shift ;;
+    -j|--jobs) need_value "$@"; jobs=$2; jobs_given=1; shift ;;
+    -n|--ranks) need_value "$@"; ranks=$2; shift ;;
+    --set) need_value "$@"; user_sets+=("$2"); shift ;;
+    --agglo) need_value "$@"; agglo=$2; shift ;;
+    --launcher) need_value "$@"; launcher=$2; shift ;;
+    --time) need_value "$@"; time_limit=$2; shift ;;
+    --slurm) slurm=1 ;;
+    --sbatch-option) need_value "$@"; sbatch_options+=("$2"); shift ;;
+    --status) status_only=1 ;;
+    *) die "unknown argument '$1' (see --help)" ;;
+  esac
+  shift
+done
+
+[[ -n $deck && -n $runs && -n $base_seed && -n $root ]] || die "--deck, --runs, --seed and --out are required (see --help)"
+[[ -f $deck && -r $deck ]] || die "base deck '$deck' is not a readable file"
+[[ $runs =~ ^[1-9][0-9]*$ ]] || die "--runs '$runs' is not allowed; allowed: an integer >= 1"
+[[ $base_seed =~ ^-?[0-9]+$ ]] || die "--seed '$base_seed' is not allowed; allowed: an integer"
+[[ $jobs =~ ^[1-9][0-9]*$ ]] || die "--jobs '$jobs' is not allowed; allowed: an integer >= 1"
+[[ $ranks =~ ^[1-9][0-9]*$ ]] || die "--ranks '$ranks' is not allowed; allowed: an integer >= 1"
+if [[ -n $time_limit ]]; then
+  [[ $time_limit =~ ^[1-9][0-9]*$ ]] || die "--time '$time_limit' is not allowed; allowed: whole minutes >= 1"
+fi
+(( runs <= 99999 )) || die "--runs $runs is not allowed; allowed: at most 99999"
+for set_text in "${user_sets[@]}"; do
+  [[ $set_text =~ ^([A-Za-z][A-Za-z0-9_]*)\.([A-Za-z][A-Za-z0-9_]*)=(.+)$ ]] || \
+    die "--set '$set_text' is not allowed; allowed: GROUP.VARIABLE=VALUE, e.g. run.end_time=2e-3"
+  group=${BASH_REMATCH[1],,}; variable=${BASH_REMATCH[2],,}; value=${BASH_REMATCH[3]}
+  if [[ ($group == run && $variable =~ ^(name|seed|overwrite|restart)$) || ($group == output && $variable == directory) ]]; then
+    die "--set $group.$variable is not allowed: the batch sets it for every run"
+  fi
+  add_override "$group" "$variable" "$value"
+done
+if [[ -z $launcher ]]; then
+  if (( slurm )); then launcher=srun; else launcher=mpirun; fi
+fi
+read -r -a launcher_words <<< "$launcher"
+[[ ${#launcher_words[@]} -gt 0 ]] || die "--launcher is empty"
+
+# ---------------------------------------------------------------------------------------------
+# The batch root: its base deck and seed, and a lock against two calls working on it at once.
+# ---------------------------------------------------------------------------------------------
+deck_text=$(cat "$deck"; printf x) || die "cannot read the base deck '$deck'"
+deck_text=${deck_text%x}
+deck_rewrite "$deck_text" || die "base deck '$deck': the last namelist group is not closed by '/'"
+batch_deck_text=$deck_out
+
+if [[ -e $root && ! -d $root ]]; then die "output root '$root' exists and is not a directory"; fi
+if (( status_only )) && [[ ! -f $root/batch.conf ]]; then die "output root '$root' holds no batch (no batch.conf)"; fi
+if [[ -d $root && ! -f $root/batch.conf ]] && [[ -n $(ls -A "$root" 2>/dev/null) ]]; then
+  die "output root '$root' is not empty and holds no batch (no batch.conf): choose a new or empty directory"
+fi
+mkdir -p "$root" || die "cannot create the output root '$root'"
+root=$(cd "$root" && pwd -P) || die "cannot enter the output root"
+
+lock="$root/.montecarlo.lock"
+if ! mkdir "$lock" 2>/dev/null; then
+  holder=$(cat "$lock/pid" 2>/dev/null)
+  if [[ -n $holder ]] && kill -0 "$holder" 2>/dev/null; then
+    die "another $script_name (pid $holder) is working on '$root'; wait for it or stop it first"
+  fi
+  rm -rf "$lock"; mkdir "$lock" || die "cannot lock '$root'"
+fi
+echo $$ > "$lock/pid"
+declare -A running_run=()     # pid -> run index (local runs in flight)
+cleanup() { rm -rf "$lock"; }
+trap cleanup EXIT
+
+if [[ -f $root/batch.conf ]]; then
+  stored_seed=$(sed -n 's/^base_seed=//p' "$root/batch.conf")
+  if ! printf '%s' "$batch_deck_text" | cmp -s - "$root/batch.nml"; then
+    die "output root '$root' holds a batch of another base deck ($root/batch.nml differs from '$deck' with the --set values); use another output root"
+  fi
+  [[ $stored_seed == "$base_seed" ]] || \
+    die "output root '$root' holds a batch with base seed $stored_seed, not $base_seed; use the same seed or another output root"
+else
+  printf '%s' "$batch_deck_text" > "$root/batch.nml.tmp" && mv -f "$root/batch.nml.tmp" "$root/batch.nml"
+  {
+    printf 'base_seed=%s\n' "$base_seed"
+    printf 'deck_sha256=%s\n' "$(sha256sum < "$root/batch.nml" | cut -d' ' -f1)"
+    printf 'source_deck=%s\n' "$deck"
+    printf 'created=%s\n' "$(date '+%Y-%m-%d %H:%M:%S')"
+  } > "$root/batch.conf.tmp" && mv -f "$root/batch.conf.tmp" "$root/batch.conf" || die "cannot write '$root/batch.conf'"
+fi
+
+run_name() { printf 'run_%04d' "$1"; }
+
+if (( status_only )); then
+  complete=0; failed=0; not_run=0
+  for ((i = 1; i <= runs; i++)); do
+    dir="$root/$(run_name "$i")"
+    if run_is_complete "$dir"; then complete=$((complete + 1))
+    elif [[ -e $dir/FAILED ]]; then failed=$((failed + 1))
+    else not_run=$((not_run + 1)); fi
+  done
+  say "batch $root: $runs runs: $complete complete, $failed failed, $not_run not run or incomplete"
+  (( complete == runs )); exit $?
+fi
+
+# ---------------------------------------------------------------------------------------------
+# Per-run decks: the batch deck with the run's identity (placeholders filled per run).
+# ---------------------------------------------------------------------------------------------
+override_keys=() override_values=()
+add_override run name @@MC_NAME@@
+add_override run seed @@MC_SEED@@
+add_override run overwrite .true.
+add_override run restart .false.
+add_override output directory @@MC_DIRECTORY@@
+deck_rewrite "$batch_deck_text" || die "internal error: the batch deck cannot be parsed"
+run_deck_template=$deck_out
+
+max_seed=$((base_seed + runs - 1))
+if (( max_seed > 2147483647 || base_seed < -2147483648 )); then
+  say "warning: seeds $base_seed..$max_seed leave the 32-bit integer range; the code will refuse those runs"
+fi
+
+write_run_deck() { # run index -> run directory with deck.nml (incomplete runs only)
+  local i=$1 dir text
+  dir="$root/$(run_name "$i")"
+  mkdir -p "$dir" || return 1
+  text=${run_deck_template//@@MC_NAME@@/"'$(run_name "$i")'"}
+  text=${text//@@MC_SEED@@/"$((base_seed + i - 1))"}
+  text=${text//@@MC_DIRECTORY@@/"$(fortran_string "$dir")"}
+  printf '%s' "$text" > "$dir/deck.nml"
+}
+
+# &output directory is character(len=256) in the code; a longer value would be cut silently.
+(( ${#root} + 10 <= 256 )) || die "output root '$root' is too long (${#root} bytes): run directories must stay within the 256 characters of &output directory"
+
+if [[ -z $agglo ]]; then agglo="$script_dir/../build/agglo"; fi
+[[ -f $agglo && -x $agglo ]] || die "executable '$agglo' not found or not executable (build it with 'make build', or pass --agglo / set AGGLO)"
+agglo="$(cd "$(dirname "$agglo")" && pwd -P)/$(basename "$agglo")"
+workdir=$(pwd -P)
+
+pending=()
+already=0
+for ((i = 1; i <= runs; i++)); do
+  if run_is_complete "$root/$(run_name "$i")"; then already=$((already + 1)); else pending+=("$i"); fi
+done
+
+# ---------------------------------------------------------------------------------------------
+# Slurm: a job-array script with one task per incomplete run.
+# ---------------------------------------------------------------------------------------------
+if (( slurm )); then
+  if (( ${#pending[@]} == 0 )); then say "batch $root: all $runs runs are complete; no script written"; exit 0; fi
+  array='' first='' last=''
+  for i in "${pending[@]}" ''; do              # compress the indices into ranges "1-4,7,9-12"
+    if [[ -n $last && $i == $((last + 1)) ]]; then last=$i; continue; fi
+    if [[ -n $first ]]; then
+      [[ -n $array ]] && array+=,
+      if [[ $first == "$last" ]]; then array+=$first; else array+="$first-$last"; fi
+    fi
+    first=$i; last=$i
+  done
+  (( jobs_given )) && array+="%$jobs"
+  for i in "${pending[@]}"; do write_run_deck "$i" || die "cannot write the deck of $(run_name "$i")"; done
+  script="$root/montecarlo.sbatch"
+  {
+    printf '#!/bin/bash\n'
+    printf '# Agglo Monte-Carlo batch: one array task per incomplete run (written by %s).\n' "$script_name"
+    printf '# Submit: sbatch <this file>. Resubmitting reruns only runs that are not complete.\n'
+    printf '#SBATCH --job-name=agglo-mc\n'
+    printf '#SBATCH --array=%s\n' "$array"
+    printf '#SBATCH --ntasks=%s\n' "$ranks"
+    printf '#SBATCH --time=%s\n' "${time_limit:-60}"
+    printf '#SBATCH --output=/dev/null\n'   # each task logs into its own run directory
+    for option in "${sbatch_options[@]}"; do printf '#SBATCH %s\n' "$option"; done
+    printf 'set -u\n'
+    printf 'root=%q\nagglo=%q\nworkdir=%q\n' "$root" "$agglo" "$workdir"
+    printf 'launcher=(%s)\n' "$(printf '%q ' "${launcher_words[@]}")"
+    printf 'ranks=%s\n' "$ranks"
+    declare -f record_run_result run_is_complete
+    cat <<'EOF'
+index=${SLURM_ARRAY_TASK_ID:?submit this script with sbatch: it is a job array}
+dir=$(printf '%s/run_%04d' "$root" "$index")
+if run_is_complete "$dir"; then exit 0; fi
+cd "$workdir" || exit 1
+rm -f "$dir/FAILED" "$dir/summary.json" "$dir/summary.json.rejected"
+"${launcher[@]}" -n "$ranks" "$agglo" "$dir/deck.nml" > "$dir/stdout.log" 2>&1 < /dev/null
+record_run_result "$dir" $?
+EOF
+  } > "$script.tmp" && mv -f "$script.tmp" "$script" || die "cannot write '$script'"
+  chmod +x "$script"
+  say "wrote $script: ${#pending[@]} array tasks ($already of $runs runs already complete); submit with: sbatch $(printf '%q' "$script")"
+  exit 0
+fi
+
+# ---------------------------------------------------------------------------------------------
+# Local runs, up to `jobs` at once.
+# ---------------------------------------------------------------------------------------------
+total=${#pending[@]}
+say "batch $root: $runs runs, $already already complete, $total to run, $jobs at a time, $ranks rank(s) each"
+(( total == 0 )) && exit 0
+
+run_command=()
+[[ -n $time_limit ]] && run_command+=(timeout --kill-after=30 "$((time_limit * 60))")
+(( ranks > 1 )) && run_command+=("${launcher_words[@]}" -n "$ranks")
+run_command+=("$agglo")
+
+declare -A start_time=()
+interrupted=0
+trap 'interrupted=1' INT TERM
+done_ok=0 done_failed=0 next=0 busy_ms=0 batch_start=$(now_ms)
+failed_runs=()
+
+start_run() { # run index
+  local i=$1 dir
+  dir="$root/$(run_name "$i")"
+  rm -f "$dir/FAILED" "$dir/summary.json" "$dir/summary.json.rejected"
+  if ! write_run_deck "$i"; then
+    mkdir -p "$dir" 2>/dev/null
+    printf 'reason: montecarlo could not write %s\n' "$dir/deck.nml" > "$dir/FAILED" 2>/dev/null
+    failed_runs+=("$i"); done_failed=$((done_failed + 1)); return
+  fi
+  "${run_command[@]}" "$dir/deck.nml" > "$dir/stdout.log" 2>&1 < /dev/null &
+  running_run[$!]=$i
+  start_time[$i]=$(now_ms)
+}
+
+progress() { # message about the run that just ended
+  local finished=$((done_ok + done_failed)) remaining=$((total - next)) eta='--'
+  if (( finished > 0 )); then
+    eta=$(format_seconds $(( (busy_ms * (remaining + ${#running_run[@]})) / (finished * jobs) )))
+  fi
+  say "$1 | done $done_ok, failed $done_failed, running ${#running_run[@]}, remaining $remaining | elapsed $(format_seconds $(($(now_ms) - batch_start))), ETA $eta"
+}
+
+stop_if_interrupted() { # after INT or TERM: stop the runs in flight (they stay incomplete) and leave
+  (( interrupted )) || return 0
+  local pid
+  for pid in "${!running_run[@]}"; do kill -TERM "$pid" 2>/dev/null; done
+  wait "${!running_run[@]}" 2>/dev/null
+  say "interrupted: ${#running_run[@]} run(s) stopped and left incomplete; call the same command again to resume"
+  exit 130
+}
+
+while (( next < total || ${#running_run[@]} > 0 )); do
+  while (( ! interrupted && next < total && ${#running_run[@]} < jobs )); do
+    start_run "${pending[next]}"; next=$((next + 1))
+  done
+  (( ${#running_run[@]} == 0 )) && continue
+  stop_if_interrupted
+  finished_pid=''
+  wait -n -p finished_pid "${!running_run[@]}"; status=$?
+  stop_if_interrupted
+  [[ -n $finished_pid ]] || continue
+  i=${running_run[$finished_pid]}; unset "running_run[$finished_pid]"
+  dir="$root/$(run_name "$i")"
+  run_ms=$(($(now_ms) - start_time[$i])); busy_ms=$((busy_ms + run_ms))
+  if record_run_result "$dir" "$status"; then
+    done_ok=$((done_ok + 1))
+    progress "$(run_name "$i") complete ($(format_seconds "$run_ms"))"
+  else
+    done_failed=$((done_failed + 1)); failed_runs+=("$i")
+    progress "$(run_name "$i") FAILED ($(sed -n 's/^reason: //p' "$dir/FAILED")); log: $dir/stdout.log"
+    tail -n 3 "$dir/stdout.log" 2>/dev/null | sed 's/^/    /'
+  fi
+done
+
+{
+  for i in "${failed_runs[@]}"; do
+    printf '%s\t%s\n' "$(run_name "$i")" "$(sed -n 's/^reason: //p' "$root/$(run_name "$i")/FAILED")"
+  done
+} > "$root/failed.txt"
+complete=0
+for ((i = 1; i <= runs; i++)); do run_is_complete "$root/$(run_name "$i")" && complete=$((complete + 1)); done
+if (( complete == runs )); then
+  say "batch $root: all $runs runs complete ($already were already complete); wall time $(format_seconds $(($(now_ms) - batch_start)))"
+  exit 0
+fi
+say "batch $root: $complete of $runs runs complete; ${#failed_runs[@]} failed (listed in $root/failed.txt); call the same command again to rerun them"
+exit 1
