@@ -22,7 +22,7 @@ module momentum_terms
   use fluid_grid, only: fluid_grid_t
   implicit none
   private
-  public :: predictor_coefficients_t, predictor_plane, divergence_plane, correction_plane
+  public :: predictor_coefficients_t, predictor_plane, divergence_plane, correction_plane, laplacian
 
   !> Coefficients of the predictor u* = u + dt (b1 E^n + b0 E^{n-1}) + implicit_weight D(u) [+ dt f],
   !> E^n = -N(u) + explicit_weight D(u), D(u) = diffusion L u.
@@ -116,6 +116,26 @@ contains
       end if
     end do
   end subroutine predictor_plane
+
+  !> lf = L f, the 7-point Laplacian (interior). The step has it fused into predictor_plane; this
+  !> stand-alone form is the reference operator (tests check the FFT solvers against it).
+  subroutine laplacian(grid, f, lf)
+    type(fluid_grid_t), intent(in) :: grid
+    real(wp), intent(in), contiguous :: f(0:, 0:, 0:)
+    real(wp), intent(inout), contiguous :: lf(0:, 0:, 0:)
+    integer :: i, j, k
+    real(wp) :: cx, cy, cz
+    cx = 1.0_wp / grid%dx**2; cy = 1.0_wp / grid%dy**2; cz = 1.0_wp / grid%dz**2
+    do k = 1, grid%nz_local
+      do j = 1, grid%ny
+        do i = 1, grid%nx
+          lf(i, j, k) = cx * (f(i + 1, j, k) - 2 * f(i, j, k) + f(i - 1, j, k)) &
+                      + cy * (f(i, j + 1, k) - 2 * f(i, j, k) + f(i, j - 1, k)) &
+                      + cz * (f(i, j, k + 1) - 2 * f(i, j, k) + f(i, j, k - 1))
+        end do
+      end do
+    end do
+  end subroutine laplacian
 
   !> rhs(1:nx, 1:ny, k) = scale * (discrete divergence of (u,v,w) at the cell centres of plane k).
   !> rhs is laid out like the FFT's padded real buffer (first extent >= nx, 1-based). Needs
