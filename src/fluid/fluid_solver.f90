@@ -11,11 +11,25 @@
 !> In a periodic box the discrete projection commutes with L and (I - nu dt/2 L), so this is the
 !> second-order AB2/CN scheme applied to the projected equations; u^{n+1} is solenoidal to round-off.
 !> Restartable history: E^{n-1}, dt_old and has_history (see fluid_solver_t).
+!>
+!> Memory traffic, not arithmetic, sets the cost of a step (docs/performance.md, Fluid), so the
+!> step is organised in as few sweeps as possible, plane by plane (momentum_terms):
+!>   1. predictor sweep: E^n for u, v, w and u* in one pass; u* goes into the E^{n-1} arrays (no
+!>      copy), and with explicit diffusion div u* / dt goes straight into the FFT buffer one plane
+!>      behind (the plane just computed is still in cache);
+!>   2. Poisson solve in the FFT buffer (no copies in or out);
+!>   3. correction sweep: u^{n+1} = u* - dt grad phi in place in the u* arrays, phi read from the FFT
+!>      buffer, the pressure, and the x-y halos; the arrays then rotate (u* -> u, E^n -> E^{n-1},
+!>      u^n -> scratch; move_alloc, nothing copied) and one z-halo message per direction carries
+!>      all three components.
+!> The two single-plane halo messages (w* below, phi above) are in flight while interior planes
+!> are computed.
 module fluid_solver
   use agglo_kinds, only: wp, i8
-  use fluid_grid, only: fluid_grid_t, grid_create, allocate_field, exchange_halos
-  use poisson_fft, only: poisson_fft_t, poisson_create, poisson_solve, helmholtz_solve
-  use momentum_terms, only: explicit_terms, laplacian, divergence, subtract_gradient
+  use fluid_grid, only: fluid_grid_t, grid_create, allocate_field
+  use halo_exchange, only: exchange_slab_halos, exchange_z_halos, start_plane_shift, finish_plane_shift
+  use poisson_fft, only: poisson_fft_t, poisson_create, poisson_solve_in_buffer, helmholtz_solve
+  use momentum_terms, only: predictor_coefficients_t, predictor_plane, divergence_plane, correction_plane
   use wall_clock, only: wall_time
   implicit none
   private
@@ -37,13 +51,16 @@ module fluid_solver
     real(wp), allocatable :: u(:, :, :), v(:, :, :), w(:, :, :)   !< m/s, face velocities, halos current
     real(wp), allocatable :: pressure(:, :, :)      !< Pa at the cell centres, time n - 1/2 (interior only)
     real(wp), allocatable :: explicit_old_u(:, :, :), explicit_old_v(:, :, :), explicit_old_w(:, :, :)  !< E^{n-1}
+                                                    !< (u* inside fluid_advance)
     logical :: has_history = .false.                !< E^{n-1} is valid (false before the first step)
     real(wp) :: dt_old = 0                          !< s, the previous step
     real(wp) :: time = 0                            !< s
     integer(i8) :: step = 0
-    ! Work arrays, allocated once.
+    ! Work arrays, allocated once: E^n, div u* / dt for the Crank-Nicolson pressure (and callers'
+    ! scratch), and the potential's plane above this slab (FFT padded layout).
     real(wp), allocatable :: explicit_u(:, :, :), explicit_v(:, :, :), explicit_w(:, :, :)
-    real(wp), allocatable :: phi(:, :, :), work(:, :, :)
+    real(wp), allocatable :: work(:, :, :)
+    real(wp), allocatable :: phi_above(:, :)
     real(wp) :: timers(timer_count) = 0             !< s accumulated per category on this rank
   end type fluid_solver_t
 
@@ -71,21 +88,21 @@ contains
     call allocate_field(solver%grid, solver%explicit_u)
     call allocate_field(solver%grid, solver%explicit_v)
     call allocate_field(solver%grid, solver%explicit_w)
-    call allocate_field(solver%grid, solver%phi)
     call allocate_field(solver%grid, solver%work)
+    if (allocated(solver%phi_above)) deallocate(solver%phi_above)
+    allocate(solver%phi_above(size(solver%poisson%real_view, 1), solver%grid%ny))
+    solver%phi_above = 0
     solver%has_history = .false.
     solver%dt_old = 0; solver%time = 0; solver%step = 0
     solver%timers = 0
   end subroutine fluid_solver_create
 
-  !> Refresh the halos of u, v, w (collective), timed as halo exchange.
+  !> Refresh the halos of u, v, w (collective; one z message per direction), timed as halo exchange.
   subroutine fluid_exchange_velocity(solver)
     type(fluid_solver_t), intent(inout) :: solver
     real(wp) :: t0
     t0 = wall_time()
-    call exchange_halos(solver%grid, solver%u)
-    call exchange_halos(solver%grid, solver%v)
-    call exchange_halos(solver%grid, solver%w)
+    call exchange_slab_halos(solver%grid%slab, solver%u, solver%v, solver%w)
     solver%timers(timer_halo) = solver%timers(timer_halo) + wall_time() - t0
   end subroutine fluid_exchange_velocity
 
@@ -96,37 +113,80 @@ contains
     type(fluid_solver_t), intent(inout) :: solver
     real(wp), intent(in) :: dt
     real(wp), intent(in), optional :: force_u(0:, 0:, 0:), force_v(0:, 0:, 0:), force_w(0:, 0:, 0:)
-    real(wp) :: b1, b0, half_nu_dt, t0, t1
+    type(predictor_coefficients_t) :: c
+    real(wp) :: t0, t1, halo
     real(wp), allocatable :: swap(:, :, :)
+    integer :: k, nzl
 
     t0 = wall_time()
+    halo = 0
+    nzl = solver%grid%nz_local
+    c%dt = dt
     if (solver%has_history) then
-      b1 = 1.0_wp + dt / (2.0_wp * solver%dt_old)
-      b0 = -dt / (2.0_wp * solver%dt_old)
+      c%b1 = 1.0_wp + dt / (2.0_wp * solver%dt_old)
+      c%b0 = -dt / (2.0_wp * solver%dt_old)
     else
-      b1 = 1.0_wp
-      b0 = 0.0_wp
+      c%b1 = 1.0_wp
+      c%b0 = 0.0_wp
     end if
-    half_nu_dt = 0.5_wp * solver%viscosity * dt
-    call explicit_terms(solver%grid, solver%u, solver%v, solver%w, &
-                        merge(0.0_wp, solver%viscosity, solver%crank_nicolson), &
-                        solver%explicit_u, solver%explicit_v, solver%explicit_w)
-    call predict(solver%u, solver%explicit_u, solver%explicit_old_u, force_u)
-    call predict(solver%v, solver%explicit_v, solver%explicit_old_v, force_v)
-    call predict(solver%w, solver%explicit_w, solver%explicit_old_w, force_w)
-    ! E^n becomes E^{n-1} (swapping the allocations: nothing is copied or allocated).
-    call move_alloc(solver%explicit_old_u, swap); call move_alloc(solver%explicit_u, solver%explicit_old_u)
-    call move_alloc(swap, solver%explicit_u)
-    call move_alloc(solver%explicit_old_v, swap); call move_alloc(solver%explicit_v, solver%explicit_old_v)
-    call move_alloc(swap, solver%explicit_v)
-    call move_alloc(solver%explicit_old_w, swap); call move_alloc(solver%explicit_w, solver%explicit_old_w)
-    call move_alloc(swap, solver%explicit_w)
-    t1 = wall_time()
-    solver%timers(timer_explicit) = solver%timers(timer_explicit) + t1 - t0
+    if (solver%crank_nicolson) then
+      c%diffusion = 0.5_wp * solver%viscosity * dt
+      c%explicit_weight = 0; c%implicit_weight = 1
+    else
+      c%diffusion = solver%viscosity
+      c%explicit_weight = 1; c%implicit_weight = 0
+    end if
 
-    call fluid_exchange_velocity(solver)
+    ! Predictor: explicit_old_* hold E^{n-1} on entry and u* after the sweep.
+    if (solver%crank_nicolson) then
+      do k = 1, nzl
+        call predictor(k)
+      end do
+      ! (I - nu dt/2 L) u* = right-hand side, one FFT Helmholtz solve per component.
+      call helmholtz_solve(solver%poisson, solver%explicit_old_u, c%diffusion)
+      call helmholtz_solve(solver%poisson, solver%explicit_old_v, c%diffusion)
+      call helmholtz_solve(solver%poisson, solver%explicit_old_w, c%diffusion)
+      t1 = wall_time()
+      call start_plane_shift(solver%grid%slab, solver%explicit_old_w(:, :, nzl), upward=.true.)
+      call finish_plane_shift(solver%grid%slab, solver%explicit_old_w(:, :, 0), upward=.true.)
+      halo = wall_time() - t1
+      do k = 1, nzl
+        call divergence_plane(solver%grid, k, solver%explicit_old_u, solver%explicit_old_v, solver%explicit_old_w, &
+                              1.0_wp / dt, solver%poisson%real_view)
+      end do
+      ! The CN pressure needs L phi = div u* / dt after the solve has overwritten the buffer.
+      call keep_divergence()
+    else
+      ! The top plane first: its w* is the lower z halo of the slab above, in flight meanwhile.
+      call predictor(nzl)
+      call start_plane_shift(solver%grid%slab, solver%explicit_old_w(:, :, nzl), upward=.true.)
+      do k = 1, nzl - 1
+        call predictor(k)
+        if (k > 1) call divergence_plane(solver%grid, k, solver%explicit_old_u, solver%explicit_old_v, &
+                                         solver%explicit_old_w, 1.0_wp / dt, solver%poisson%real_view)
+      end do
+      if (nzl > 1) call divergence_plane(solver%grid, nzl, solver%explicit_old_u, solver%explicit_old_v, &
+                                         solver%explicit_old_w, 1.0_wp / dt, solver%poisson%real_view)
+      t1 = wall_time()
+      call finish_plane_shift(solver%grid%slab, solver%explicit_old_w(:, :, 0), upward=.true.)
+      halo = wall_time() - t1
+      call divergence_plane(solver%grid, 1, solver%explicit_old_u, solver%explicit_old_v, solver%explicit_old_w, &
+                            1.0_wp / dt, solver%poisson%real_view)
+    end if
+    solver%timers(timer_explicit) = solver%timers(timer_explicit) + wall_time() - t0 - halo
+    solver%timers(timer_halo) = solver%timers(timer_halo) + halo
+
     call project(solver, dt)
-    call fluid_exchange_velocity(solver)
+
+    ! The corrected u* arrays become u^{n+1}, E^n becomes E^{n-1}, and u^n's arrays become next
+    ! step's E^n scratch (moving the allocations: nothing is copied or allocated).
+    call rotate(solver%u, solver%explicit_old_u, solver%explicit_u)
+    call rotate(solver%v, solver%explicit_old_v, solver%explicit_v)
+    call rotate(solver%w, solver%explicit_old_w, solver%explicit_w)
+    ! correction_plane refreshed the x-y halos; the z halos of u, v, w go in one message each way.
+    t1 = wall_time()
+    call exchange_z_halos(solver%grid%slab, solver%u, solver%v, solver%w)
+    solver%timers(timer_halo) = solver%timers(timer_halo) + wall_time() - t1
     solver%dt_old = dt
     solver%has_history = .true.
     solver%time = solver%time + dt
@@ -134,62 +194,87 @@ contains
 
   contains
 
-    !> u <- u* (interior); the Crank-Nicolson form needs u's halos for L u^n, current on entry.
-    subroutine predict(vel, explicit_now, explicit_old, force)
-      real(wp), intent(inout) :: vel(0:, 0:, 0:)
-      real(wp), intent(in) :: explicit_now(0:, 0:, 0:), explicit_old(0:, 0:, 0:)
-      real(wp), intent(in), optional :: force(0:, 0:, 0:)
-      integer :: i, j, k, nx, ny, nzl
-      nx = solver%grid%nx; ny = solver%grid%ny; nzl = solver%grid%nz_local
-      if (solver%crank_nicolson) then
-        call laplacian(solver%grid, vel, solver%work)
-        do k = 1, nzl
-          do j = 1, ny
-            do i = 1, nx
-              solver%work(i, j, k) = vel(i, j, k) + dt * (b1 * explicit_now(i, j, k) + b0 * explicit_old(i, j, k)) &
-                                   + half_nu_dt * solver%work(i, j, k)
-            end do
+    !> work = div u* / dt (explicit loops: an array assignment from the FFT buffer's pointer
+    !> could make the compiler allocate a temporary against aliasing).
+    subroutine keep_divergence()
+      integer :: i, j, k
+      do k = 1, nzl
+        do j = 1, solver%grid%ny
+          do i = 1, solver%grid%nx
+            solver%work(i, j, k) = solver%poisson%real_view(i, j, k)
           end do
         end do
-        if (present(force)) solver%work(1:nx, 1:ny, 1:nzl) = solver%work(1:nx, 1:ny, 1:nzl) + dt * force(1:nx, 1:ny, 1:nzl)
-        call helmholtz_solve(solver%poisson, solver%work, half_nu_dt)
-        vel(1:nx, 1:ny, 1:nzl) = solver%work(1:nx, 1:ny, 1:nzl)
-      else
-        do k = 1, nzl
-          do j = 1, ny
-            do i = 1, nx
-              vel(i, j, k) = vel(i, j, k) + dt * (b1 * explicit_now(i, j, k) + b0 * explicit_old(i, j, k))
-            end do
-          end do
-        end do
-        if (present(force)) vel(1:nx, 1:ny, 1:nzl) = vel(1:nx, 1:ny, 1:nzl) + dt * force(1:nx, 1:ny, 1:nzl)
-      end if
-    end subroutine predict
+      end do
+    end subroutine keep_divergence
+
+    !> velocity <- corrected (u^{n+1}), history <- explicit_now (E^n), explicit_now <- old velocity.
+    subroutine rotate(velocity, history, explicit_now)
+      real(wp), allocatable, intent(inout) :: velocity(:, :, :), history(:, :, :), explicit_now(:, :, :)
+      call move_alloc(velocity, swap)
+      call move_alloc(history, velocity)
+      call move_alloc(explicit_now, history)
+      call move_alloc(swap, explicit_now)
+    end subroutine rotate
+
+    subroutine predictor(k)
+      integer, intent(in) :: k
+      call predictor_plane(solver%grid, k, c, solver%u, solver%v, solver%w, &
+                           solver%explicit_u, solver%explicit_v, solver%explicit_w, &
+                           solver%explicit_old_u, solver%explicit_old_v, solver%explicit_old_w, force_u, force_v, force_w)
+    end subroutine predictor
   end subroutine fluid_advance
 
-  !> Projection of the predicted velocity (halos current): solve L phi = div u* / dt, correct the
-  !> velocity (interior) and set the pressure. Velocity halos are stale on exit.
+  !> Projection: the FFT buffer holds div u* / dt (interior) and explicit_old_* hold u*. Solve
+  !> L phi = div u* / dt in the buffer, set u^{n+1} = u* - dt grad phi in place (with the x-y
+  !> halos) and the pressure. The plane of phi above the slab travels while the other planes are
+  !> corrected.
   subroutine project(solver, dt)
     type(fluid_solver_t), intent(inout) :: solver
     real(wp), intent(in) :: dt
-    real(wp) :: t0, t1
-    integer :: nx, ny, nzl
-    nx = solver%grid%nx; ny = solver%grid%ny; nzl = solver%grid%nz_local
+    real(wp) :: t0, t1, halo
+    integer :: k, nzl
+    nzl = solver%grid%nz_local
     t0 = wall_time()
-    call divergence(solver%grid, solver%u, solver%v, solver%w, 1.0_wp / dt, solver%work)
-    call poisson_solve(solver%poisson, solver%work, solver%phi)
+    call poisson_solve_in_buffer(solver%poisson)
+    ! phi's bottom plane is the top z halo of the slab below.
     t1 = wall_time()
-    call exchange_halos(solver%grid, solver%phi)
-    solver%timers(timer_halo) = solver%timers(timer_halo) + wall_time() - t1
+    call start_plane_shift(solver%grid%slab, solver%poisson%real_view(:, :, 1), upward=.false.)
+    halo = wall_time() - t1
+    do k = 1, nzl - 1
+      call correct(k, solver%poisson%real_view(:, :, k + 1))
+    end do
     t1 = wall_time()
-    call subtract_gradient(solver%grid, solver%phi, dt, solver%u, solver%v, solver%w)
-    ! work = L phi = div u* / dt, so the CN pressure needs no extra stencil.
-    if (solver%crank_nicolson) then
-      solver%pressure(1:nx, 1:ny, 1:nzl) = solver%density * (solver%phi(1:nx, 1:ny, 1:nzl) &
-          - 0.5_wp * solver%viscosity * dt * solver%work(1:nx, 1:ny, 1:nzl))
-    else
-      solver%pressure(1:nx, 1:ny, 1:nzl) = solver%density * solver%phi(1:nx, 1:ny, 1:nzl)
-    end if
-    solver%timers(timer_poisson) = solver%timers(timer_poisson) + wall_time() - t1 + (t1 - t0)
+    call finish_plane_shift(solver%grid%slab, solver%phi_above, upward=.false.)
+    halo = halo + wall_time() - t1
+    call correct(nzl, solver%phi_above)
+    solver%timers(timer_poisson) = solver%timers(timer_poisson) + wall_time() - t0 - halo
+    solver%timers(timer_halo) = solver%timers(timer_halo) + halo
+
+  contains
+
+    !> Velocity correction and pressure on plane k; phi_next is phi on plane k + 1.
+    !> p^{n+1/2} = rho (phi - nu dt/2 L phi) (CN; L phi = div u* / dt is kept in work) or rho phi.
+    subroutine correct(k, phi_next)
+      integer, intent(in) :: k
+      real(wp), intent(in), contiguous :: phi_next(:, :)
+      integer :: i, j, nx
+      nx = solver%grid%nx
+      call correction_plane(solver%grid, k, solver%poisson%real_view(:, :, k), phi_next, dt, &
+                            solver%explicit_old_u, solver%explicit_old_v, solver%explicit_old_w)
+      if (solver%crank_nicolson) then
+        do j = 1, solver%grid%ny
+          do i = 1, nx
+            solver%pressure(i, j, k) = solver%density * (solver%poisson%real_view(i, j, k) &
+                - 0.5_wp * solver%viscosity * dt * solver%work(i, j, k))
+          end do
+        end do
+      else
+        do j = 1, solver%grid%ny
+          do i = 1, nx
+            solver%pressure(i, j, k) = solver%density * solver%poisson%real_view(i, j, k)
+          end do
+        end do
+      end if
+    end subroutine correct
   end subroutine project
 end module fluid_solver

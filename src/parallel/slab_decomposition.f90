@@ -5,6 +5,7 @@
 !> The layout is taken from fftw_mpi_local_size_3d_transposed, so the solver never redistributes.
 module slab_decomposition
   use, intrinsic :: iso_c_binding, only: c_intptr_t
+  use mpi_f08, only: MPI_Request
   use fftw_interface, only: fftw_mpi_init, fftw_mpi_local_size_3d_transposed
   use agglo_kinds, only: wp
   use parallel_env, only: world, my_rank, n_ranks
@@ -20,9 +21,14 @@ module slab_decomposition
     integer :: y_offset_spectral = 0
     integer(c_intptr_t) :: complex_alloc = 0     !< complex numbers FFTW needs in the in-place buffer of this rank
     integer :: rank_below = 0, rank_above = 0    !< neighbours in z (periodic)
-    real(wp), allocatable :: send_buffer(:), receive_buffer(:)   !< one x-y plane with its halo ring
+    ! Halo buffers, allocated once (halo_exchange allocates nothing). Each holds up to
+    ! max_halo_fields x-y planes with their halo ring, so u, v, w travel in one message per direction.
+    real(wp), allocatable :: send_up(:), send_down(:), receive_below(:), receive_above(:)
+    type(MPI_Request) :: requests(4)             !< the non-blocking exchange in flight (halo_exchange)
+    integer :: pending = 0                       !< requests in flight (0: none)
   end type slab_t
 
+  integer, parameter, public :: max_halo_fields = 3
   logical :: fftw_mpi_started = .false.
 
 contains
@@ -53,6 +59,8 @@ contains
     end if
     slab%rank_below = modulo(my_rank - 1, n_ranks)
     slab%rank_above = modulo(my_rank + 1, n_ranks)
-    allocate(slab%send_buffer((nx + 2) * (ny + 2)), slab%receive_buffer((nx + 2) * (ny + 2)))
+    allocate(slab%send_up(max_halo_fields * (nx + 2) * (ny + 2)), slab%send_down(max_halo_fields * (nx + 2) * (ny + 2)), &
+             slab%receive_below(max_halo_fields * (nx + 2) * (ny + 2)), &
+             slab%receive_above(max_halo_fields * (nx + 2) * (ny + 2)))
   end subroutine slab_create
 end module slab_decomposition
