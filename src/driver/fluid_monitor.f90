@@ -6,6 +6,8 @@ module fluid_monitor
   use logger, only: log_line
   use parallel_env, only: is_root, world, mpi_wp, n_ranks
   use wall_clock, only: format_duration
+  use error_handling, only: fatal
+  use file_system, only: rename_file
   use fluid_diagnostics, only: fluid_statistics_t
   use fluid_solver, only: fluid_solver_t, timer_count, timer_names
   implicit none
@@ -16,14 +18,18 @@ module fluid_monitor
 
 contains
 
-  !> Rank 0 opens the time series; a restarted run appends to it.
-  subroutine statistics_open(path, append)
+  !> Rank 0 opens the time series. A restarted run (append) continues it from the checkpoint of
+  !> step last_step: the rows an interrupted run wrote after that step are dropped first, so every
+  !> step appears once and the file equals that of an uninterrupted run.
+  subroutine statistics_open(path, append, last_step)
     character(len=*), intent(in) :: path
     logical, intent(in) :: append
+    integer(i8), intent(in) :: last_step
     logical :: exists
     if (.not. is_root()) return
     inquire(file=path, exist=exists)
     if (append .and. exists) then
+      call drop_rows_after(path, last_step)
       open(newunit=statistics_unit, file=path, status='old', position='append', action='write')
     else
       open(newunit=statistics_unit, file=path, status='replace', action='write')
@@ -32,6 +38,35 @@ contains
                                     'max_divergence[1/s]  cfl'
     end if
   end subroutine statistics_open
+
+  !> Rewrite path with its '#' header lines and its rows up to step last_step, through path.tmp and
+  !> an atomic rename (a run killed meanwhile leaves the old file intact). Reading stops at the first
+  !> row past last_step or the first row that is not a complete row of 7 numbers (a row torn by a
+  !> kill): rows are written in step order and the checkpoint of last_step was written after its row.
+  subroutine drop_rows_after(path, last_step)
+    character(len=*), intent(in) :: path
+    integer(i8), intent(in) :: last_step
+    character(len=512) :: line
+    integer(i8) :: step
+    real(wp) :: values(6)
+    integer :: old_unit, new_unit, status
+    logical :: renamed
+    open(newunit=old_unit, file=path, status='old', action='read')
+    open(newunit=new_unit, file=path//'.tmp', status='replace', action='write')
+    do
+      read(old_unit, '(a)', iostat=status) line
+      if (status /= 0) exit
+      if (line(1:1) /= '#') then
+        read(line, *, iostat=status) step, values
+        if (status /= 0 .or. step > last_step) exit
+      end if
+      write(new_unit, '(a)') trim(line)
+    end do
+    close(old_unit)
+    close(new_unit)
+    call rename_file(path//'.tmp', path, renamed)
+    if (.not. renamed) call fatal('fluid_monitor: cannot rename '//path//'.tmp to '//path, collective=.false.)
+  end subroutine drop_rows_after
 
   subroutine statistics_write(step, time, dt, stats)
     integer(i8), intent(in) :: step

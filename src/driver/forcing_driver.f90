@@ -16,7 +16,7 @@ module forcing_driver
   use file_system, only: file_exists, rename_file
   use parallel_env, only: is_root, barrier
   use hdf5_io, only: h5_file_t, h5_create, h5_open, h5_close, h5_exists, h5_append, h5_write_array, h5_read_array, &
-                     h5_write_slab
+                     h5_write_slab, h5_truncate, h5_delete
   use fluid_solver, only: fluid_solver_t, fluid_advance
   use eswaran_pope_forcing, only: ep_forcing_t, forcing_init_on_grid, forcing_advance, forcing_set_fields, &
                                   forcing_power_input, forcing_pack_state, forcing_unpack_state
@@ -25,6 +25,12 @@ module forcing_driver
   private
   public :: forcing_driver_t, forcing_driver_start, forced_fluid_advance, forcing_driver_statistics, &
             forcing_driver_state, forcing_driver_finish
+
+  !> The time-series datasets of flow_statistics.h5 (one row per statistics output; appended in
+  !> forcing_driver_statistics, which must stay in step with this list).
+  character(len=*), parameter :: series_names(12) = [character(len=17) :: 'time', 'step', 'u_rms', &
+      'u_rms_component', 'kinetic_energy', 'dissipation', 'power_input', 'taylor_microscale', 're_lambda', &
+      'kolmogorov_length', 'kmax_eta', 'integral_length']
 
   type :: forcing_driver_t
     logical :: active = .false.                 !< &scene forcing = 'eswaran_pope'
@@ -70,12 +76,51 @@ contains
     driver%average_start = cfg%forcing%average_start
     driver%statistics_path = run_file('flow_statistics.h5')
     if (driver%statistics_interval > 0) then
-      if (.not. (cfg%run%restart .and. file_exists(driver%statistics_path))) then
+      if (cfg%run%restart .and. file_exists(driver%statistics_path)) then
+        call drop_rows_after(driver%statistics_path, solver%step)
+      else
         call h5_create(file, driver%statistics_path)
         call h5_close(file)
       end if
     end if
   end subroutine forcing_driver_start
+
+  !> A restart from the checkpoint of step last_step continues flow_statistics.h5 from there: the
+  !> rows and spectra an interrupted run wrote after that step are dropped (h5_truncate, h5_delete),
+  !> so every step appears once and the file equals that of an uninterrupted run. Rows are in step
+  !> order; every row up to last_step is complete (the checkpoint is written after the row), while
+  !> a run killed inside forcing_driver_statistics may have left some datasets one row longer.
+  !> Collective.
+  subroutine drop_rows_after(path, last_step)
+    character(len=*), intent(in) :: path
+    integer(i8), intent(in) :: last_step
+    type(h5_file_t) :: file
+    integer, allocatable :: steps(:)
+    integer :: kept, row, n
+    call h5_open(file, path, writable=.true.)
+    if (h5_exists(file, 'step')) then
+      call h5_read_array(file, 'step', steps)
+      kept = count(steps <= last_step)
+      do row = kept + 1, size(steps)
+        call h5_delete(file, spectrum_name(int(steps(row), i8)))
+      end do
+      do n = 1, size(series_names)
+        if (h5_exists(file, trim(series_names(n)))) call h5_truncate(file, trim(series_names(n)), kept)
+      end do
+      if (kept < size(steps)) call log_line('forcing: '//int_text(size(steps) - kept)//' rows after step '// &
+          int_text(int(last_step))//' (written after the checkpoint) dropped from '//path)
+    end if
+    call h5_close(file)
+  end subroutine drop_rows_after
+
+  !> spectra/energy_<step, 10 digits>
+  function spectrum_name(step) result(name)
+    integer(i8), intent(in) :: step
+    character(len=:), allocatable :: name
+    character(len=10) :: step_text
+    write(step_text, '(i10.10)') step
+    name = 'spectra/energy_'//step_text
+  end function spectrum_name
 
   !> One fluid step with the forcing (or without, if it is off): f^n on the faces, fluid_advance,
   !> then the OU processes to the next time level. Collective.
@@ -100,7 +145,6 @@ contains
     real(wp), intent(in) :: viscosity
     type(h5_file_t) :: file
     real(wp) :: power
-    character(len=10) :: step_text
     if (.not. driver%active .or. driver%statistics_interval <= 0) return
     if (mod(solver%step, int(driver%statistics_interval, i8)) /= 0) return
     power = forcing_power_input(driver%forcing, solver%u, solver%v, solver%w)
@@ -120,9 +164,7 @@ contains
       call h5_append(file, 'kmax_eta', [s%kmax_eta])
       call h5_append(file, 'integral_length', [s%integral_length])
       if (.not. h5_exists(file, 'spectra/wavenumber')) call h5_write_array(file, 'spectra/wavenumber', s%wavenumber)
-      write(step_text, '(i10.10)') solver%step
-      if (.not. h5_exists(file, 'spectra/energy_'//step_text)) &
-          call h5_write_array(file, 'spectra/energy_'//step_text, s%spectrum)
+      call h5_write_array(file, spectrum_name(solver%step), s%spectrum)
       call h5_close(file)
       call log_line('flow: t = '//real_text(solver%time)//' s  u_rms = '//real_text(s%u_rms)//' m/s  epsilon = '// &
           real_text(s%dissipation)//'  <f.u> = '//real_text(s%power_input)//' m^2/s^3  Re_lambda = '// &

@@ -40,7 +40,7 @@ contains
     viscous_limit = huge(1.0_wp)
     if (.not. solver%crank_nicolson) viscous_limit = explicit_viscous_limit(solver%grid%dx, solver%grid%dy, &
                                                                             solver%grid%dz, solver%viscosity)
-    call statistics_open(run_file('fluid_statistics.dat'), append=cfg%run%restart)
+    call statistics_open(run_file('fluid_statistics.dat'), append=cfg%run%restart, last_step=solver%step)
     next_field_time = next_output_time(solver%time, cfg%output%field_interval, cfg%run%end_time)
     if (.not. cfg%run%restart) then
       call compute_fluid_statistics(solver, 0.0_wp, stats)

@@ -38,7 +38,7 @@ module hdf5_io
   private
   public :: h5_file_t, h5_create, h5_open, h5_close, h5_flush, h5_exists, &
             h5_write_slab, h5_read_slab, h5_write_array, h5_read_array, h5_write_string, h5_read_string, &
-            h5_append, h5_dataset_shape, hdf5_io_finalize
+            h5_append, h5_truncate, h5_delete, h5_dataset_shape, hdf5_io_finalize
 
   !> An open HDF5 file (parallel over MPI_COMM_WORLD, or serial on the calling rank).
   type :: h5_file_t
@@ -871,4 +871,49 @@ contains
       call append_rows(file, name, int_type(), 0, n, c_loc(empty_int))
     end if
   end subroutine append_int_1d
+  !> Shrink the extendible (time-series) dataset name to its first rows rows: rows are the last
+  !> Fortran index, as h5_append adds them (the columns of a 2-D table). A restarted run uses it to
+  !> drop the rows an interrupted run wrote after the checkpoint it continues from. rows equal to the
+  !> stored count changes nothing; more rows than stored, a scalar, or a dataset that was not made
+  !> extendible (h5_append makes them chunked with an unlimited last dimension) stop with a message.
+  !> Collective on a parallel file. HDF5 keeps the file space of the dropped rows; later appends reuse
+  !> the allocated chunks.
+  subroutine h5_truncate(file, name, rows)
+    type(h5_file_t), intent(in) :: file
+    character(len=*), intent(in) :: name
+    integer, intent(in) :: rows
+    integer(hid_t) :: dataset
+    integer(hsize_t), allocatable :: dims(:)
+    integer :: status
+    character(len=80) :: text
+    call require_open(file, name, .true.)
+    if (.not. h5_exists(file, name)) call fatal('hdf5_io: cannot truncate '//trim(name)//' in '//file%path// &
+                                                ': no such dataset', collective=.false.)
+    dims = h5_dataset_shape(file, name)
+    if (size(dims) == 0) call fatal('hdf5_io: cannot truncate the scalar '//trim(name)//' in '//file%path, &
+                                    collective=.false.)
+    if (rows < 0 .or. int(rows, hsize_t) > dims(size(dims))) then
+      write(text, '(a,i0,a,i0,a)') ' to ', rows, ' rows: it holds ', dims(size(dims)), ' (allowed: 0 .. that)'
+      call fatal('hdf5_io: cannot truncate '//trim(name)//' in '//file%path//trim(text), collective=.false.)
+    end if
+    if (int(rows, hsize_t) == dims(size(dims))) return
+    dims(size(dims)) = int(rows, hsize_t)
+    call h5dopen_f(file%id, name, dataset, status)
+    call require_ok(status, 'opening a dataset', file, name)
+    call h5dset_extent_f(dataset, dims, status)
+    call require_ok(status, 'shrinking a dataset (only extendible ones can be)', file, name)
+    call h5dclose_f(dataset, status)
+  end subroutine h5_truncate
+
+  !> Remove the dataset or group name (with its members) if it exists; nothing happens if it does
+  !> not. Collective on a parallel file. (HDF5 does not return the freed space to the file system.)
+  subroutine h5_delete(file, name)
+    type(h5_file_t), intent(in) :: file
+    character(len=*), intent(in) :: name
+    integer :: status
+    call require_open(file, name, .true.)
+    if (.not. h5_exists(file, name)) return
+    call h5ldelete_f(file%id, name, status)
+    call require_ok(status, 'deleting a link', file, name)
+  end subroutine h5_delete
 end module hdf5_io

@@ -8,7 +8,7 @@ program test_hdf5_io
   use hdf5, only: hsize_t
   use hdf5_io, only: h5_file_t, h5_create, h5_open, h5_close, h5_exists, h5_write_slab, h5_read_slab, &
                      h5_write_array, h5_read_array, h5_write_string, h5_read_string, h5_append, &
-                     h5_dataset_shape, hdf5_io_finalize
+                     h5_truncate, h5_delete, h5_dataset_shape, hdf5_io_finalize
   use parallel_env, only: parallel_start, my_rank, n_ranks, barrier, is_root
   use file_system, only: delete_file
   use test_framework, only: test_start, test_finish, check, check_equal
@@ -140,6 +140,42 @@ program test_hdf5_io
   call check(size(dims) == 2 .and. dims(2) == 3, 'dataset_shape_fortran_order')
   call h5_read_array(file, 'series/count', ints)
   call check(all(ints == [1, 2]), 'append_int_rows')
+  call h5_close(file)
+
+  ! A restart drops the rows written after its checkpoint (h5_truncate) and the per-row datasets
+  ! (h5_delete), then appends again: the new rows must follow the kept ones, as in one run.
+  call h5_open(file, path, writable=.true.)
+  call h5_truncate(file, 'series/time', 1)
+  call h5_truncate(file, 'series/position', 2)
+  call h5_truncate(file, 'series/count', 2)         ! as many as stored: unchanged
+  call h5_delete(file, 'deep/a/b')                  ! a group with its dataset
+  call h5_delete(file, 'spectra/never_written')     ! absent: nothing to do
+  call h5_close(file)
+  call h5_open(file, path, writable=.false.)
+  call h5_read_array(file, 'series/time', reals)
+  call check(size(reals) == 1 .and. all(reals == [0.5_wp]), 'truncate_1d_keeps_first_rows')
+  call h5_read_array(file, 'series/position', table)
+  call check(all(shape(table) == [3, 2]) .and. all(table == reshape([1.0_wp, 2.0_wp, 3.0_wp, 4.0_wp, 5.0_wp, 6.0_wp], &
+             [3, 2])), 'truncate_2d_keeps_first_rows')
+  call h5_read_array(file, 'series/count', ints)
+  call check(all(ints == [1, 2]), 'truncate_to_stored_rows_is_no_change')
+  call check(.not. h5_exists(file, 'deep/a/b/reals') .and. .not. h5_exists(file, 'deep/a/b') .and. &
+             h5_exists(file, 'deep/a/ints'), 'delete_removes_only_the_named_group')
+  call h5_close(file)
+  call h5_open(file, path, writable=.true.)
+  call h5_append(file, 'series/time', [2.5_wp])
+  call h5_append(file, 'series/position', reshape([10.0_wp, 11.0_wp, 12.0_wp], [3, 1]))
+  call h5_truncate(file, 'series/count', 0)
+  call h5_append(file, 'series/count', [5])
+  call h5_close(file)
+  call h5_open(file, path, writable=.false.)
+  call h5_read_array(file, 'series/time', reals)
+  call check(size(reals) == 2 .and. all(reals == [0.5_wp, 2.5_wp]), 'append_after_truncate_1d')
+  call h5_read_array(file, 'series/position', table)
+  call check(all(shape(table) == [3, 3]) .and. all(table(:, 2) == [4.0_wp, 5.0_wp, 6.0_wp]) .and. &
+             all(table(:, 3) == [10.0_wp, 11.0_wp, 12.0_wp]), 'append_after_truncate_2d')
+  call h5_read_array(file, 'series/count', ints)
+  call check(size(ints) == 1 .and. all(ints == [5]), 'truncate_to_zero_then_append')
   call h5_close(file)
 
   ! Serial file: rank 0 alone creates, writes and reads it (the particle writers' mode).

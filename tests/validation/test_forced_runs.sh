@@ -2,6 +2,9 @@
 # End-to-end forced runs of the resolved scene with $AGGLO (issue 3):
 #  - restart with forcing: 2n steps in one run == n steps + restart + n steps, bit for bit
 #    (h5diff without tolerance on the whole final checkpoint: fluid/* and forcing/state), 2 ranks;
+#  - the time series of the restarted run (flow_statistics.h5: rows and spectra; fluid_statistics.dat)
+#    equal the uninterrupted run's, also after a simulated kill that left rows and a spectrum written
+#    after the last checkpoint (dropped on restart, not duplicated);
 #  - 1 rank vs 2 ranks: the same forced deck gives u, v, w within 1e-12 x max|u| after 60 steps;
 #  - the log states T_L, sigma, epsilon* and the E&P estimate (docs/decks.md, &forcing);
 #  - flow_statistics.h5 holds the time series and one spectrum per statistics row.
@@ -11,7 +14,7 @@ export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_
 work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
 cd "$work"
 
-deck() { # name, max_steps, restart
+deck() { # name, max_steps, restart[, checkpoint_interval]
   cat <<NML
 &run name = '$1', max_steps = $2, restart = $3, end_time = 1.0, dt = 2.5e-4, dt_mode = 'fixed',
      overwrite = .true., progress_interval = 1000, seed = 77 /
@@ -19,7 +22,7 @@ deck() { # name, max_steps, restart
 &grid nx = 16, ny = 16, nz = 16, length_x = 1.0e-3, length_y = 1.0e-3, length_z = 1.0e-3 /
 &fluid viscosity = 1.0e-6, viscous_scheme = 'explicit', init = 'rest' /
 &forcing time_scale = 0.01, target_dissipation = 8.0e-3, statistics_interval = 10 /
-&output directory = '$1', checkpoint_interval = 0, field_interval = 0.0 /
+&output directory = '$1', checkpoint_interval = ${4:-0}, checkpoints_kept = 5, field_interval = 0.0 /
 NML
 }
 run() { mpirun -np "$1" "$AGGLO" "$2" > "$2.out" 2>&1; }
@@ -42,6 +45,39 @@ if run 2 whole.nml && run 2 split1.nml && run 2 split2.nml; then
   else echo "FAIL forced_runs/restart_restores_forcing_state: no restore line in the log"; fi
 else
   echo "FAIL forced_runs/restart_with_forcing_bit_for_bit: a run failed: $(tail -n 3 ./*.nml.out | head -c 400)"
+fi
+
+# Time series after the restart: every dataset of flow_statistics.h5 (6 rows, 6 spectra) and the
+# text series identical to the uninterrupted run (h5diff without tolerance; cmp).
+series_equal() { # run directory: prints nothing and succeeds if its time series equal whole/'s
+  h5diff -q whole/flow_statistics.h5 "$1"/flow_statistics.h5 > "$1.diff" 2>&1 \
+    && h5diff -q "$1"/flow_statistics.h5 whole/flow_statistics.h5 >> "$1.diff" 2>&1 \
+    && [ "$(h5ls "$1"/flow_statistics.h5/spectra | grep -c '^energy_')" = 6 ] \
+    && [ "$(h5ls "$1"/flow_statistics.h5/u_rms | sed -n 's/.*Dataset {\([0-9]*\)\/Inf}.*/\1/p')" = 6 ] \
+    && cmp -s whole/fluid_statistics.dat "$1"/fluid_statistics.dat
+}
+if series_equal split; then
+  echo "PASS forced_runs/restart_time_series_equal_uninterrupted  (flow_statistics.h5: 6 rows, 6 spectra, h5diff exact; fluid_statistics.dat identical)"
+else
+  echo "FAIL forced_runs/restart_time_series_equal_uninterrupted: $(head -c 300 split.diff)"
+fi
+
+# --- restart after a kill: rows and spectra written after the last checkpoint are dropped -------
+# 55 steps with checkpoints at 20, 40 and the end-of-run one at 55; deleting checkpoint 55 leaves the
+# directory as a run killed after step 55 but before its checkpoint: the restart continues from step
+# 40, so the statistics row and spectrum of step 50 (and text rows 41..55) were written past it.
+deck killed 55 .false. 20 > killed1.nml
+deck killed 60 .true. 20 > killed2.nml
+if run 2 killed1.nml && rm -f killed/checkpoints/checkpoint_0000000055.h5 && run 2 killed2.nml; then
+  if grep -q 'continuing from .*checkpoint_0000000040.h5' killed2.nml.out \
+     && grep -q 'forcing: 1 rows after step 40 (written after the checkpoint) dropped' killed2.nml.out \
+     && series_equal killed && h5diff -q "$(final_checkpoint whole)" "$(final_checkpoint killed)" >> killed.diff 2>&1; then
+    echo "PASS forced_runs/restart_after_kill_drops_rows_past_checkpoint  (from step 40: row and spectrum of step 50 rewritten once; series and final checkpoint = uninterrupted run)"
+  else
+    echo "FAIL forced_runs/restart_after_kill_drops_rows_past_checkpoint: $(head -c 300 killed.diff) $(grep -m2 -E 'continuing|dropped' killed2.nml.out)"
+  fi
+else
+  echo "FAIL forced_runs/restart_after_kill_drops_rows_past_checkpoint: a run failed: $(tail -n 3 killed*.nml.out | head -c 400)"
 fi
 
 # --- 1 rank vs 2 ranks -----------------------------------------------------------------------
