@@ -240,7 +240,11 @@ contains
     real(wp), intent(in) :: value
     character(len=:), allocatable :: text
     character(len=32) :: buffer
-    write(buffer, '(es12.5)') value
+    if (value /= 0.0_wp .and. (abs(value) >= 1.0e100_wp .or. abs(value) < 1.0e-99_wp)) then
+      write(buffer, '(es13.5e3)') value     ! three exponent digits keep their "E"
+    else
+      write(buffer, '(es12.5)') value
+    end if
     text = trim(adjustl(buffer))
   end function real_text
 
