@@ -36,6 +36,9 @@ contains
     if (cfg%scene%fluid /= 'resolved' .and. cfg%run%restart) call input_error('run', 'restart', &
         '.true. with fluid = '''//trim(cfg%scene%fluid)//'''', &
         '.false. (pair scenes run in about a second and write no checkpoints: run them again)')
+    if (cfg%scene%fluid /= 'resolved' .and. cfg%scene%particle_substeps /= 1) call input_error('scene', &
+        'particle_substeps', int_text(cfg%scene%particle_substeps)//' with fluid = '''//trim(cfg%scene%fluid)//'''', &
+        '1 (sub-steps split a fluid step; without a resolved fluid set &run dt itself)')
   end subroutine check_scene_combinations
 
   !> Resolved fluid: the grid must split into equal slabs along z and y (pencil transposes of the FFT).

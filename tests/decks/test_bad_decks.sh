@@ -89,3 +89,5 @@ expect_error resolved_with_pair 1 "&run name = 'p' /
 &scene fluid = 'resolved', particles = 'pair' /" 'immersed-boundary coupling'
 expect_error pair_scene_restart 1 "&run name = 'p', restart = .true. /
 &scene fluid = 'none', particles = 'pair' /" '&run restart' 'no checkpoints'
+expect_error pair_scene_substeps 1 "&run name = 'p' /
+&scene fluid = 'stokes', particles = 'pair', particle_substeps = 4 /" '&scene particle_substeps' '1 (sub-steps'
