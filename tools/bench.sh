@@ -8,11 +8,11 @@ cd "$(dirname "$0")/.."
 BUILD=${BUILD:-build}
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 make --no-print-directory -s build "$BUILD/bench/bench_fluid" "$BUILD/bench/bench_pair" \
-  "$BUILD/bench/bench_forcing"   # [forcing]
+  "$BUILD/bench/bench_forcing"
 work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
 exe=$PWD/$BUILD/bench/bench_fluid
 pair_exe=$PWD/$BUILD/bench/bench_pair
-forcing_exe=$PWD/$BUILD/bench/bench_forcing   # [forcing]
+forcing_exe=$PWD/$BUILD/bench/bench_forcing
 agglo=$PWD/$BUILD/agglo
 parts=${BENCH_PARTS:-fluid pair forcing}   # e.g. BENCH_PARTS=pair make bench
 echo "Agglo fluid benchmark on $(nproc) cores: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')"
@@ -28,7 +28,7 @@ for n in 64 128; do
 done
 fi
 
-# [forcing] Eswaran-Pope forcing per step against a whole Crank-Nicolson fluid step (input/hit_box.nml);
+# Eswaran-Pope forcing per step against a whole Crank-Nicolson fluid step (input/hit_box.nml);
 # target <= 10% (issue 3). Means over 20 (64^3) or 5 (128^3) repetitions, slowest rank.
 if [[ $parts == *forcing* ]]; then
   echo

@@ -24,7 +24,7 @@ contains
   subroutine write_fluid_checkpoint(solver, checkpoints_kept, forcing_state)
     type(fluid_solver_t), intent(in) :: solver
     integer, intent(in) :: checkpoints_kept
-    integer(i8), intent(in), optional :: forcing_state(:)   ! [forcing] packed OU state (forcing_driver)
+    integer(i8), intent(in), optional :: forcing_state(:)   ! packed Eswaran-Pope state (forcing_driver)
     type(h5_file_t) :: file
     integer :: shape3(3)
     shape3 = [solver%grid%nx, solver%grid%ny, solver%grid%nz]
@@ -41,7 +41,7 @@ contains
     call h5_write_array(file, 'fluid/dt_old', solver%dt_old)
     call h5_write_array(file, 'fluid/step', solver%step)
     call h5_write_array(file, 'fluid/has_history', merge(1, 0, solver%has_history))
-    if (present(forcing_state)) then                        ! [forcing]
+    if (present(forcing_state)) then
       if (size(forcing_state) > 0) call h5_write_array(file, 'forcing/state', forcing_state)
     end if
     call checkpoint_commit(file, solver%step, checkpoints_kept)

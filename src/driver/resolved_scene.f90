@@ -11,13 +11,13 @@ module resolved_scene
   use run_directory, only: run_file
   use checkpoint_files, only: newest_checkpoint
   use physical_constants, only: two_pi
-  use fluid_solver, only: fluid_solver_t, fluid_solver_create, fluid_advance, timer_io
+  use fluid_solver, only: fluid_solver_t, fluid_solver_create, timer_io
   use initial_fields, only: set_rest, set_taylor_green, set_random_field
   use fluid_diagnostics, only: fluid_statistics_t, compute_fluid_statistics, advective_rate
   use time_step_control, only: next_time_step, explicit_viscous_limit
   use fluid_restart, only: write_fluid_checkpoint, read_fluid_checkpoint, write_fluid_snapshot, read_initial_field
   use fluid_monitor, only: statistics_open, statistics_write, statistics_close, progress_line, timing_report
-  use forcing_driver, only: forcing_driver_t, forcing_driver_start, forced_fluid_advance, &      ! [forcing]
+  use forcing_driver, only: forcing_driver_t, forcing_driver_start, forced_fluid_advance, &
                             forcing_driver_statistics, forcing_driver_state, forcing_driver_finish
   implicit none
   private
@@ -29,14 +29,14 @@ contains
     type(agglo_config_t), intent(in) :: cfg
     type(fluid_solver_t) :: solver
     type(fluid_statistics_t) :: stats
-    type(forcing_driver_t) :: forcing   ! [forcing] Eswaran-Pope body force and flow statistics (inactive if off)
+    type(forcing_driver_t) :: forcing   ! Eswaran-Pope body force and flow statistics (inactive when off)
     character(len=:), allocatable :: restart_path
     real(wp) :: dt, rate, viscous_limit, next_field_time, start_wall, step_wall, t0
     integer(i8) :: first_step
     logical :: finite
 
     call start_fluid(cfg, solver, restart_path)
-    call forcing_driver_start(forcing, cfg, solver, restart_path)                 ! [forcing]
+    call forcing_driver_start(forcing, cfg, solver, restart_path)
     viscous_limit = huge(1.0_wp)
     if (.not. solver%crank_nicolson) viscous_limit = explicit_viscous_limit(solver%grid%dx, solver%grid%dy, &
                                                                             solver%grid%dz, solver%viscosity)
@@ -51,11 +51,13 @@ contains
     start_wall = wall_time()
     step_wall = start_wall
 
+    ! rate: the advective rate sum(|u_i|/dx_i) of the current field, for the next step's dt and
+    ! the CFL check of the step just taken (one pass over the field per step).
+    call advective_rate(solver, rate, finite)
     do while (solver%time < cfg%run%end_time .and. solver%step < cfg%run%max_steps)
-      call advective_rate(solver, rate, finite)
       dt = next_time_step(cfg%run%dt_mode, cfg%run%dt, cfg%run%cfl_target, rate, viscous_limit, solver%time, &
                           cfg%run%end_time)
-      call forced_fluid_advance(forcing, solver, dt)   ! [forcing] fluid_advance with f^n, then f^{n+1}
+      call forced_fluid_advance(forcing, solver, dt)   ! fluid_advance with the body force f^n, then f^n+1
 
       call advective_rate(solver, rate, finite)
       if (.not. finite) call stop_run(solver, 'the velocity field is no longer finite (NaN or infinity) at step ')
@@ -65,7 +67,7 @@ contains
         call compute_fluid_statistics(solver, dt, stats)
         call statistics_write(solver%step, solver%time, dt, stats)
       end if
-      call forcing_driver_statistics(forcing, solver, cfg%fluid%viscosity)       ! [forcing]
+      call forcing_driver_statistics(forcing, solver, cfg%fluid%viscosity)
       if (mod(solver%step, int(cfg%run%progress_interval, i8)) == 0) then
         call progress_line(solver%step, solver%time, dt, (wall_time() - step_wall) / cfg%run%progress_interval, &
             min(real(cfg%run%max_steps - solver%step, wp), (cfg%run%end_time - solver%time) / dt))
@@ -84,7 +86,7 @@ contains
     if (cfg%output%checkpoint_interval == 0 .or. &
         mod(solver%step, int(max(cfg%output%checkpoint_interval, 1), i8)) /= 0) call checkpoint(solver)
     call statistics_close()
-    call forcing_driver_finish(forcing, solver)                                        ! [forcing]
+    call forcing_driver_finish(forcing, solver)
     call timing_report(solver, solver%step - first_step, wall_time() - start_wall)
     call log_line('resolved scene: '//trim(cfg%run%name)//' reached t = '//real_text(solver%time)//' s; '// &
         'time series '//run_file('fluid_statistics.dat')//', fields '//run_file('fields.xdmf')// &
@@ -102,7 +104,7 @@ contains
     subroutine checkpoint(solver)
       type(fluid_solver_t), intent(inout) :: solver
       t0 = wall_time()
-      call write_fluid_checkpoint(solver, cfg%output%checkpoints_kept, forcing_driver_state(forcing))  ! [forcing]
+      call write_fluid_checkpoint(solver, cfg%output%checkpoints_kept, forcing_driver_state(forcing))
       solver%timers(timer_io) = solver%timers(timer_io) + wall_time() - t0
     end subroutine checkpoint
 
@@ -122,7 +124,7 @@ contains
   subroutine start_fluid(cfg, solver, path)
     type(agglo_config_t), intent(in) :: cfg
     type(fluid_solver_t), intent(inout) :: solver
-    character(len=:), allocatable, intent(out) :: path   ! [forcing] the checkpoint restarted from ('' if none)
+    character(len=:), allocatable, intent(out) :: path   ! the checkpoint restarted from ('' if none)
     path = ''
     call fluid_solver_create(solver, cfg%grid%nx, cfg%grid%ny, cfg%grid%nz, cfg%grid%length_x, cfg%grid%length_y, &
         cfg%grid%length_z, cfg%fluid%viscosity, cfg%fluid%density, cfg%fluid%viscous_scheme, cfg%fluid%fft_planning)
