@@ -29,7 +29,7 @@ done
 fi
 
 # Eswaran-Pope forcing per step against a whole Crank-Nicolson fluid step (input/hit_box.nml);
-# target <= 10% (issue 3). Means over 20 (64^3) or 5 (128^3) repetitions, slowest rank.
+# target <= 10% (docs/performance.md). Means over 20 (64^3) or 5 (128^3) repetitions, slowest rank.
 if [[ $parts == *forcing* ]]; then
   echo
   echo "Forcing:    N  R  forcing_ms   step_ms  percent"

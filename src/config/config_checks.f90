@@ -1,5 +1,5 @@
 !> Checks that involve more than one namelist group (each group checks itself first).
-!> One subroutine per room of the code, so each room owns its own rules.
+!> One subroutine per part of the code (fluid, forcing, particles), so each part keeps its rules together.
 module config_checks
   use agglo_kinds, only: wp
   use agglo_config, only: agglo_config_t

@@ -1,4 +1,4 @@
-!> Small file-system helpers. Renames go through the C library's rename(), which is atomic
+!> Small file-system routines. Renames go through the C library's rename(), which is atomic
 !> within one file system: a file written to a temporary name and renamed is either the old
 !> complete file or the new complete file, never a torn one.
 module file_system

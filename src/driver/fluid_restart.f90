@@ -1,5 +1,5 @@
 !> Fluid state in files: checkpoints (everything for a bit-for-bit continuation), field snapshots,
-!> and the initial field read from a file. Built on the io room's hdf5_io / checkpoint_files /
+!> and the initial field read from a file. Built on hdf5_io / checkpoint_files /
 !> field_output. All routines are collective.
 !>
 !> Checkpoint datasets (Fortran shapes): fluid/u, fluid/v, fluid/w, fluid/pressure,

@@ -1,4 +1,4 @@
-!> The forcing room's part of the resolved scene: the Eswaran-Pope body force in the momentum
+!> The forcing part of the resolved scene: the Eswaran-Pope body force in the momentum
 !> predictor, its state in the checkpoint, and the flow statistics (time series and spectra in
 !> flow_statistics.h5, time averages in the log). Nothing is allocated when &scene forcing = 'none'.
 !>

@@ -6,7 +6,7 @@
 !> on one file system). A run killed while writing leaves at most a .tmp file, which
 !> newest_checkpoint never returns; so every *.h5 in the directory is a complete checkpoint.
 !> What goes into the file (fields, multistep history, step, time, dt, random streams) is written
-!> by the owners of that state with the hdf5_io routines between checkpoint_begin and
+!> by the modules that hold that state, with the hdf5_io routines between checkpoint_begin and
 !> checkpoint_commit.
 !>
 !> Every routine here is collective (all ranks call it).

@@ -13,7 +13,7 @@
 !> current one (left by a killed run that went past its last checkpoint) are left out; the continued
 !> run overwrites them when it gets there.
 !>
-!> Staggered fields in XDMF (MAC grid, interfaces of the fluid room): every field is written as
+!> Staggered fields in XDMF (MAC grid, layout of fluid_grid): every field is written as
 !> NODE data of a 3DCoRectMesh whose nodes are exactly the points where that field lives:
 !>   location 'centre' (pressure, scalars): nodes at ((i-1/2)dx, (j-1/2)dy, (k-1/2)dz), origin (dx/2, dy/2, dz/2)
 !>   location 'x_face' (u):                 nodes at (i dx, (j-1/2)dy, (k-1/2)dz),       origin (dx, dy/2, dz/2)

@@ -64,7 +64,7 @@ grep -q "name = 'old'" existing/run.nml && echo "PASS existing_run_untouched" ||
 expect_error restart_without_run 1 "&run name = 'fresh', restart = .true. /
 &output directory = 'nothing_here' /" '&run restart' 'no earlier run'
 
-# The pair protocol (issue: overlapping start, gap <= 0, unknown shape, aspect ratio <= 0).
+# The pair protocol (overlapping start, gap <= 0, unknown shape, aspect ratio <= 0).
 pair="&run name = 'p' /
 &scene fluid = 'none', particles = 'pair' /"
 expect_error pair_zero_gap 1 "$pair

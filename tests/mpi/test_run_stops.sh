@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Run-time stops of the resolved scene with $AGGLO (issue 2: "A NaN or a CFL above the limit stops
-# the run with a message and a final field dump"), 2 ranks:
+# Run-time stops of the resolved scene with $AGGLO (docs/validation.md, "Restart hygiene and run
+# stops"): a NaN or a CFL above the limit stops the run with a message and a final field dump; 2 ranks:
 #  - CFL: a fixed dt with strong Eswaran-Pope forcing from rest; the flow accelerates until the
 #    advective CFL number dt (|u|/dx + |v|/dy + |w|/dz)_max passes &run cfl_limit = 1. The run must
 #    exit non-zero with the message naming the CFL number, the limit and the step, leave the field

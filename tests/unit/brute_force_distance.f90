@@ -10,7 +10,7 @@ module brute_force_distance
   private
   public :: point_ellipse_distance, point_body_distance, brute_force_gap
 
-  ! The pair being sampled (set by brute_force_gap; the refinement helpers read it).
+  ! The pair being sampled (set by brute_force_gap; the refinement routines read it).
   type(spheroid_t) :: b1, b2
   real(wp) :: x1(3), x2(3), r1(3,3), r2(3,3)
 

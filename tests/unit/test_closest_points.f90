@@ -212,7 +212,7 @@ program test_closest_points
   q2 = quaternion_product(q1, quaternion_from_axis_angle([0.0_wp, 0.0_wp, 1.0_wp], 2.0_wp))
   call check_close(symmetry_axis_angle(q1, q2), pi - 2.0_wp, 1.0e-13_wp, 'psi_obtuse_folded')
 
-  ! --- Collision-point angles: (theta1, phi1) of the result map back to point1; the lab-point helper
+  ! --- Collision-point angles: (theta1, phi1) of the result map back to point1; the lab-point routine
   ! agrees; needle tip-to-tip contact is at the poles phi = 0 / pi.
   worst_point = 0.0_wp
   do i = 1, 50
@@ -327,7 +327,7 @@ contains
     write(*, '(a,es10.3,a,es10.3,a,i0)') '  worst |gap - brute| / r = ', worst_error, ', worst certificate bound / r = ', &
       worst_bound, ', multi-start fallbacks ', n_fallback
     call check_equal(n_converged, n_pairs, 'random_pairs_all_converged')
-    ! Issue 4: gap error <= 1e-9 r against brute force for >= 1000 random pairs.
+    ! Required (docs/validation.md, closest points): gap error <= 1e-9 r against brute force for >= 1000 random pairs.
     call check_below(worst_error, 1.0e-9_wp, 'random_pairs_gap_vs_brute_force  '//trim(detail))
     call check_below(worst_consistency, 1.01e-12_wp, 'random_pairs_points_on_surfaces_and_aligned')
     ! The certified bracket [gap, gap + bound] of the true distance is tight.

@@ -63,7 +63,7 @@ for shape in needle disk; do
   }
 done
 
-# 4. Extremes (issue: aspect ratios 1, 1.0001, 20, 1/20; gaps down to 0.1 nm; dt 1e-9 to 1e-5 s):
+# 4. Extremes (aspect ratios 1, 1.0001, 20, 1/20; gaps down to 0.1 nm; dt 1e-9 to 1e-5 s):
 #    every run completes (closest points converge or the run says why), no NaN, no overlap left.
 for case in "sphere 1.0 1.0e-10 1.0e-9 2.0e-6" "spheroid 1.0001 1.0e-10 1.0e-7 2.0e-4" \
             "spheroid 20.0 1.0e-9 1.0e-5 2.0e-2" "spheroid 0.05 1.0e-9 1.0e-5 2.0e-2" \

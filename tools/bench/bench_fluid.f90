@@ -32,7 +32,7 @@ program bench_fluid
   call get_command_argument(2, argument); read(argument, *) steps
   allocate(fft_times(steps), poisson_times(steps), copy_times(steps), step_times(steps), parts(steps, timer_count), &
            io_times(3))
-  ! Water in a 1 mm box, random field of rms 5 cm/s, explicit diffusion (the issue's target case).
+  ! Water in a 1 mm box, random field of rms 5 cm/s, explicit diffusion (the target case of docs/performance.md, Fluid).
   call fluid_solver_create(solver, n, n, n, 1.0e-3_wp, 1.0e-3_wp, 1.0e-3_wp, 1.0e-6_wp, 997.0_wp, 'explicit', 'estimate')
   call set_random_field(solver, 1_i8, 0.05_wp, 2.0_wp * 6.283185307179586_wp / 1.0e-3_wp)
   dt = 0.1_wp * (1.0e-3_wp / n)**2 / 1.0e-6_wp / 12.0_wp
