@@ -4,13 +4,13 @@
 !> "deck: &group variable = value is not allowed; allowed: range".
 module deck_file
   use mpi_f08, only: MPI_Bcast, MPI_INTEGER, MPI_CHARACTER, MPI_COMM_WORLD, MPI_Comm_rank
-  use agglo_kinds, only: wp, i8
+  use agglo_kinds, only: wp
   use error_handling, only: fatal, input_error
   implicit none
   private
-  public :: deck_t, deck_line_length, deck_load, deck_from_lines, deck_check_groups, deck_has_group, &
+  public :: deck_t, deck_line_length, deck_load, deck_check_groups, &
             check_namelist_read, require_positive, require_nonnegative, require_range, require_option, &
-            require_positive_int, real_text, int_text, logical_text
+            require_positive_int, real_text, int_text
 
   integer, parameter :: deck_line_length = 512
 
@@ -59,16 +59,6 @@ contains
     call MPI_Bcast(deck%lines, len(deck%lines) * size(deck%lines), MPI_CHARACTER, 0, MPI_COMM_WORLD)
     deck%path = path
   end subroutine deck_load
-
-  !> A deck made from lines in memory (tests, and decks built by tools).
-  subroutine deck_from_lines(lines, deck)
-    character(len=*), intent(in) :: lines(:)
-    type(deck_t), intent(out) :: deck
-    allocate(deck%lines(max(size(lines), 1)))
-    deck%lines = ''
-    if (size(lines) > 0) deck%lines(1:size(lines)) = lines
-    deck%path = '(memory)'
-  end subroutine deck_from_lines
 
   !> Every "&name" in the deck must be a known group, appear once and be closed by "/".
   !> (A namelist read silently skips groups it was not asked for, so a typo like &grdi would
@@ -133,20 +123,6 @@ contains
       i = i + 1
     end do
   end subroutine scan_line
-
-  logical function deck_has_group(deck, group)
-    type(deck_t), intent(in) :: deck
-    character(len=*), intent(in) :: group
-    integer :: i
-    logical :: inside
-    character(len=64) :: name
-    deck_has_group = .false.
-    inside = .false.
-    do i = 1, size(deck%lines)
-      call scan_line(deck%lines(i), inside, name)
-      if (name == lower(group)) deck_has_group = .true.
-    end do
-  end function deck_has_group
 
   pure function lower(text) result(out)
     character(len=*), intent(in) :: text
@@ -255,11 +231,4 @@ contains
     write(buffer, '(i0)') value
     text = trim(buffer)
   end function int_text
-
-  function logical_text(value) result(text)
-    logical, intent(in) :: value
-    character(len=:), allocatable :: text
-    text = merge('.true. ', '.false.', value)
-    text = trim(text)
-  end function logical_text
 end module deck_file

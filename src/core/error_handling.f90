@@ -4,7 +4,7 @@ module error_handling
   use logger, only: log_error_line, log_is_root
   implicit none
   private
-  public :: fatal, warn, input_error
+  public :: fatal, input_error
 
   integer, parameter :: abort_code = 2
 
@@ -28,11 +28,6 @@ contains
     call MPI_Abort(MPI_COMM_WORLD, abort_code)
     error stop abort_code
   end subroutine fatal
-
-  subroutine warn(message)
-    character(len=*), intent(in) :: message
-    if (log_is_root()) call log_error_line('agglo: warning: '//trim(message))
-  end subroutine warn
 
   !> A deck error naming the namelist group, the variable, the bad value and the allowed range.
   subroutine input_error(group, variable, value, allowed)

@@ -13,7 +13,7 @@ module pair_scene
   use run_directory, only: run_file
   use pair_setup, only: pair_t, build_pair
   use rigid_body, only: rigid_body_step, integrator_code, angular_velocity_lab
-  use closest_points, only: find_closest_points, symmetry_axis_angle
+  use closest_points, only: closest_points_t, find_closest_points, symmetry_axis_angle
   use dlvo, only: dlvo_model_t, dlvo_setup, dlvo_log_constants, dlvo_evaluation_t, dlvo_evaluate, &
                   relative_normal_energy, escape_energy
   use collision, only: collision_model_t, collision_result_t, collision_setup, collision_log_settings, &
@@ -165,10 +165,10 @@ contains
 
   subroutine update_contact(pair)
     type(pair_t), intent(inout) :: pair
-    type(pair_t) :: previous
-    previous%contact = pair%contact
+    type(closest_points_t) :: previous   ! warm start (a copy: the result overwrites pair%contact)
+    previous = pair%contact
     call find_closest_points(pair%shape, pair%body(1)%position, pair%body(1)%quaternion, pair%shape, &
-                             pair%body(2)%position, pair%body(2)%quaternion, pair%contact, previous=previous%contact)
+                             pair%body(2)%position, pair%body(2)%quaternion, pair%contact, previous=previous)
     if (.not. pair%contact%converged) call fatal('pair scene: closest points did not converge: '// &
                                                  trim(pair%contact%message))
   end subroutine update_contact

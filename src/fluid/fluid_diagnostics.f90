@@ -10,7 +10,6 @@ module fluid_diagnostics
   use mpi_f08, only: MPI_Allreduce, MPI_IN_PLACE, MPI_SUM, MPI_MAX
   use agglo_kinds, only: wp
   use parallel_env, only: world, mpi_wp
-  use fluid_grid, only: fluid_grid_t
   use fluid_solver, only: fluid_solver_t
   implicit none
   private
@@ -22,7 +21,6 @@ module fluid_diagnostics
     real(wp) :: max_divergence = 0      !< 1/s
     real(wp) :: max_speed(3) = 0        !< m/s, max |u|, |v|, |w|
     real(wp) :: cfl = 0                 !< with the dt passed in
-    logical :: finite = .true.          !< no NaN or infinity in the velocity
   end type fluid_statistics_t
 
 contains
@@ -91,7 +89,6 @@ contains
       stats%max_divergence = maxima(1)
       stats%max_speed = maxima(2:4)
       stats%cfl = dt * (maxima(2) / grid%dx + maxima(3) / grid%dy + maxima(4) / grid%dz)
-      stats%finite = (sums(1) == sums(1)) .and. sums(1) <= huge(sums(1))
     end associate
   end subroutine compute_fluid_statistics
 end module fluid_diagnostics

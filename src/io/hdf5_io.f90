@@ -16,10 +16,10 @@
 !> (a Fortran (nx, ny, nz) dataset is (nz, ny, nx) in h5py).
 !> Call hdf5_io_finalize once before MPI_Finalize (the library is opened on first use).
 module hdf5_io
-  use, intrinsic :: iso_c_binding, only: c_ptr, c_loc, c_char, c_null_char, c_size_t
+  use, intrinsic :: iso_c_binding, only: c_ptr, c_loc, c_char, c_null_char
   use hdf5, only: hid_t, hsize_t, size_t, h5open_f, h5close_f, h5kind_to_type, H5_REAL_KIND, H5_INTEGER_KIND, &
                   h5pcreate_f, h5pclose_f, h5pset_fapl_mpio_f, h5pset_dxpl_mpio_f, h5pset_chunk_f, &
-                  H5P_FILE_ACCESS_F, H5P_DATASET_XFER_F, H5P_DATASET_CREATE_F, H5P_DEFAULT_F, &
+                  H5P_FILE_ACCESS_F, H5P_DATASET_XFER_F, H5P_DATASET_CREATE_F, &
                   H5FD_MPIO_COLLECTIVE_F, h5fcreate_f, h5fopen_f, h5fclose_f, h5fflush_f, &
                   H5F_ACC_TRUNC_F, H5F_ACC_RDWR_F, H5F_ACC_RDONLY_F, H5F_SCOPE_GLOBAL_F, &
                   h5gcreate_f, h5gclose_f, h5lexists_f, h5ldelete_f, &

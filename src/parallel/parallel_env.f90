@@ -1,14 +1,14 @@
 !> MPI start and stop, the rank layout, and the few global reductions everyone needs.
 module parallel_env
   use mpi_f08, only: MPI_Comm, MPI_COMM_WORLD, MPI_Init, MPI_Finalize, MPI_Comm_rank, MPI_Comm_size, &
-                     MPI_Allreduce, MPI_IN_PLACE, MPI_SUM, MPI_MAX, MPI_MIN, MPI_DOUBLE_PRECISION, &
+                     MPI_Allreduce, MPI_IN_PLACE, MPI_SUM, MPI_MAX, MPI_DOUBLE_PRECISION, &
                      MPI_Datatype, MPI_Initialized, MPI_Barrier
   use agglo_kinds, only: wp
   use logger, only: log_set_rank
   implicit none
   private
   public :: parallel_start, parallel_stop, my_rank, n_ranks, is_root, world, mpi_wp, &
-            global_sum, global_max, global_min, barrier
+            global_sum, global_max, barrier
 
   integer, protected :: my_rank = 0
   integer, protected :: n_ranks = 1
@@ -48,13 +48,6 @@ contains
     total = local
     call MPI_Allreduce(MPI_IN_PLACE, total, 1, mpi_wp, MPI_MAX, world)
   end function global_max
-
-  function global_min(local) result(total)
-    real(wp), intent(in) :: local
-    real(wp) :: total
-    total = local
-    call MPI_Allreduce(MPI_IN_PLACE, total, 1, mpi_wp, MPI_MIN, world)
-  end function global_min
 
   subroutine barrier()
     call MPI_Barrier(world)

@@ -9,7 +9,7 @@
 module dlvo
   use agglo_kinds, only: wp
   use vector_algebra, only: cross
-  use physical_constants, only: pi, boltzmann_constant, elementary_charge, vacuum_permittivity
+  use physical_constants, only: pi, boltzmann_constant, elementary_charge, vacuum_permittivity, avogadro_number
   use config_dlvo, only: dlvo_config_t
   use logger, only: log_line
   use spheroid, only: spheroid_t, principal_curvatures, principal_directions
@@ -302,7 +302,7 @@ contains
     call log_line(trim(line))
     write(line, '(a,f8.3,a,es12.5,a,f9.4,a)') 'dlvo: eps_r = ', model%relative_permittivity, &
         ', ion number density n = ', model%ion_number_density, ' 1/m^3 (', &
-        model%ion_number_density / 6.02214076e26_wp * 1.0e3_wp, ' mM)'
+        model%ion_number_density / avogadro_number, ' mM)'   ! n / N_A in mol/m^3 = mM
     call log_line(trim(line))
     write(line, '(a,es12.5,a,es12.5,a,es12.5)') 'dlvo: surface charge density = ', model%surface_charge_density, &
         ' C/m^2, psi0 = ', model%surface_potential, ' V, Theta = ', model%theta

@@ -17,7 +17,7 @@
 !>    new loads -> rigid_body_kick(h/2) (velocity Verlet).
 module rigid_body
   use agglo_kinds, only: wp
-  use vector_algebra, only: cross
+  use vector_algebra, only: cross, outer
   use quaternion, only: quaternion_advance, rotation_matrix, rotate_to_lab, rotate_to_body, quaternion_normalise
   use error_handling, only: fatal
   use spheroid, only: spheroid_t
@@ -25,7 +25,7 @@ module rigid_body
   private
   public :: rigid_body_t, rigid_body_init, rigid_body_of_spheroid, rigid_body_step, rigid_body_kick, rigid_body_drift, &
             rigid_body_substeps, &
-            angular_velocity_lab, set_angular_velocity_lab, inverse_inertia_lab, inertia_lab, point_velocity, &
+            angular_velocity_lab, set_angular_velocity_lab, inverse_inertia_lab, point_velocity, &
             kinetic_energy, translational_kinetic_energy, rotational_kinetic_energy, linear_momentum, &
             angular_momentum, integrator_code, integrator_euler, integrator_verlet
 
@@ -89,19 +89,7 @@ contains
     body%angular_velocity_body = rotate_to_body(body%quaternion, omega)
   end subroutine set_angular_velocity_lab
 
-  !> Lab inertia tensor i = R I R^T (paper, after Eq. 20).
-  pure function inertia_lab(body) result(inertia)
-    type(rigid_body_t), intent(in) :: body
-    real(wp) :: inertia(3, 3), r(3, 3)
-    integer :: k
-    r = rotation_matrix(body%quaternion)
-    inertia = 0.0_wp
-    do k = 1, 3
-      inertia = inertia + body%inertia_body(k) * spread(r(:, k), 2, 3) * spread(r(:, k), 1, 3)
-    end do
-  end function inertia_lab
-
-  !> i^-1 = R I^-1 R^T.
+  !> Inverse lab inertia tensor i^-1 = R I^-1 R^T (i = R I R^T: paper, after Eq. 20).
   pure function inverse_inertia_lab(body) result(inverse)
     type(rigid_body_t), intent(in) :: body
     real(wp) :: inverse(3, 3), r(3, 3)
@@ -109,7 +97,7 @@ contains
     r = rotation_matrix(body%quaternion)
     inverse = 0.0_wp
     do k = 1, 3
-      inverse = inverse + spread(r(:, k), 2, 3) * spread(r(:, k), 1, 3) / body%inertia_body(k)
+      inverse = inverse + outer(r(:, k), r(:, k)) / body%inertia_body(k)
     end do
   end function inverse_inertia_lab
 

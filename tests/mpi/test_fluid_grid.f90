@@ -5,7 +5,7 @@ program test_fluid_grid
   use agglo_kinds, only: wp
   use parallel_env, only: parallel_start, n_ranks, global_max, global_sum
   use fluid_grid, only: fluid_grid_t, grid_create, allocate_field, exchange_halos, z_centre, x_face
-  use test_framework, only: test_start, test_finish, check, check_equal, check_below, check_close
+  use test_framework, only: test_start, test_finish, check_equal, check_below, check_close
   implicit none
   type(fluid_grid_t) :: grid
   real(wp), allocatable :: field(:, :, :)

@@ -8,12 +8,11 @@ program test_collision
   use config_dlvo, only: dlvo_config_t
   use collision, only: collision_model_t, collision_result_t, collision_setup, collide, detection_distance, &
                        collision_detected, approach_speed, contact_impulse, regime_stick, regime_slide, &
-                       regime_elastic_limit, regime_frictionless, collision_paper, collision_frictionless, &
-                       collision_coulomb
-  use dlvo, only: dlvo_model_t, dlvo_setup, dlvo_pair_forces, dlvo_energy
+                       regime_elastic_limit
+  use dlvo, only: dlvo_model_t, dlvo_setup, dlvo_pair_forces
   use rigid_body, only: rigid_body_t, rigid_body_init, rigid_body_step, kinetic_energy, linear_momentum, &
-                        angular_momentum, point_velocity, integrator_euler, integrator_verlet
-  use quaternion, only: rotate_to_lab, rotate_to_body, quaternion_from_axis_angle, quaternion_normalise
+                        angular_momentum, integrator_euler, integrator_verlet
+  use quaternion, only: rotate_to_lab, rotate_to_body, quaternion_normalise
   use random_stream, only: random_stream_t, stream_seed, stream_uniform, stream_normal
   use test_framework, only: test_start, test_finish, check, check_close, check_below, check_equal
   implicit none

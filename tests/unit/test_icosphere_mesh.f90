@@ -4,7 +4,6 @@
 !> 320-face volume deficit and face-centre depth quoted in docs/physics.md section 1.
 program test_icosphere_mesh
   use agglo_kinds, only: wp
-  use physical_constants, only: pi
   use spheroid, only: spheroid_t, make_spheroid, implicit_function, surface_area
   use icosphere_mesh, only: icosphere_mesh_t, build_icosphere_mesh, mesh_volume, mesh_area, icosphere_face_count
   use test_framework, only: test_start, test_finish, check, check_close, check_below, check_equal
