@@ -31,26 +31,27 @@ contains
     type(fluid_solver_t), intent(in) :: solver
     real(wp), intent(out) :: rate
     logical, intent(out) :: finite
-    real(wp) :: maxima(4)
-    integer :: nx, ny, nzl
-    nx = solver%grid%nx; ny = solver%grid%ny; nzl = solver%grid%nz_local
-    maxima(1) = maxval(abs(solver%u(1:nx, 1:ny, 1:nzl)))
-    maxima(2) = maxval(abs(solver%v(1:nx, 1:ny, 1:nzl)))
-    maxima(3) = maxval(abs(solver%w(1:nx, 1:ny, 1:nzl)))
-    ! A NaN survives a sum but not necessarily maxval: flag it through the sum of squares.
-    maxima(4) = merge(0.0_wp, 1.0_wp, is_finite_sum(solver, nx, ny, nzl))
+    real(wp) :: maxima(4), total
+    integer :: i, j, k
+    maxima = 0; total = 0
+    associate (u => solver%u, v => solver%v, w => solver%w)
+      do k = 1, solver%grid%nz_local
+        do j = 1, solver%grid%ny
+          do i = 1, solver%grid%nx
+            maxima(1) = max(maxima(1), abs(u(i, j, k)))
+            maxima(2) = max(maxima(2), abs(v(i, j, k)))
+            maxima(3) = max(maxima(3), abs(w(i, j, k)))
+            total = total + u(i, j, k) + v(i, j, k) + w(i, j, k)
+          end do
+        end do
+      end do
+    end associate
+    ! A NaN survives a sum but not necessarily max: flag it (and an infinity) through the sum.
+    maxima(4) = merge(0.0_wp, 1.0_wp, (total == total) .and. abs(total) <= huge(total))
     call MPI_Allreduce(MPI_IN_PLACE, maxima, 4, mpi_wp, MPI_MAX, world)
     rate = maxima(1) / solver%grid%dx + maxima(2) / solver%grid%dy + maxima(3) / solver%grid%dz
     finite = maxima(4) == 0.0_wp .and. rate <= huge(rate)
   end subroutine advective_rate
-
-  logical function is_finite_sum(solver, nx, ny, nzl)
-    type(fluid_solver_t), intent(in) :: solver
-    integer, intent(in) :: nx, ny, nzl
-    real(wp) :: total
-    total = sum(solver%u(1:nx, 1:ny, 1:nzl)) + sum(solver%v(1:nx, 1:ny, 1:nzl)) + sum(solver%w(1:nx, 1:ny, 1:nzl))
-    is_finite_sum = (total == total) .and. abs(total) <= huge(total)
-  end function is_finite_sum
 
   !> All diagnostics of the current state (velocity halos must be current).
   subroutine compute_fluid_statistics(solver, dt, stats)
