@@ -17,7 +17,7 @@ module fluid_restart
   use fluid_solver, only: fluid_solver_t, fluid_exchange_velocity
   implicit none
   private
-  public :: write_fluid_checkpoint, read_fluid_checkpoint, write_fluid_snapshot, read_initial_field
+  public :: write_fluid_checkpoint, read_fluid_checkpoint, write_fluid_state, write_fluid_snapshot, read_initial_field
 
 contains
 
@@ -26,18 +26,11 @@ contains
     integer, intent(in) :: checkpoints_kept
     integer(i8), intent(in), optional :: forcing_state(:)   ! packed Eswaran-Pope state (forcing_driver)
     type(h5_file_t) :: file
-    integer :: shape3(3)
-    shape3 = [solver%grid%nx, solver%grid%ny, solver%grid%nz]
     call checkpoint_begin(solver%step, file)
-    call write_interior(file, 'fluid/u', solver%u)
-    call write_interior(file, 'fluid/v', solver%v)
-    call write_interior(file, 'fluid/w', solver%w)
-    call write_interior(file, 'fluid/pressure', solver%pressure)
-    call write_interior(file, 'fluid/explicit_old_u', solver%explicit_old_u)
-    call write_interior(file, 'fluid/explicit_old_v', solver%explicit_old_v)
-    call write_interior(file, 'fluid/explicit_old_w', solver%explicit_old_w)
-    call h5_write_array(file, 'fluid/grid_shape', shape3)
-    call h5_write_array(file, 'fluid/time', solver%time)
+    call write_fluid_state(file, solver)
+    call write_interior(file, 'fluid/explicit_old_u', solver%explicit_old_u, solver)
+    call write_interior(file, 'fluid/explicit_old_v', solver%explicit_old_v, solver)
+    call write_interior(file, 'fluid/explicit_old_w', solver%explicit_old_w, solver)
     call h5_write_array(file, 'fluid/dt_old', solver%dt_old)
     call h5_write_array(file, 'fluid/step', solver%step)
     call h5_write_array(file, 'fluid/has_history', merge(1, 0, solver%has_history))
@@ -45,18 +38,30 @@ contains
       if (size(forcing_state) > 0) call h5_write_array(file, 'forcing/state', forcing_state)
     end if
     call checkpoint_commit(file, solver%step, checkpoints_kept)
-
-  contains
-
-    subroutine write_interior(file, name, field)
-      type(h5_file_t), intent(in) :: file
-      character(len=*), intent(in) :: name
-      real(wp), intent(in) :: field(0:, 0:, 0:)
-      real(wp), allocatable :: interior(:, :, :)
-      interior = field(1:solver%grid%nx, 1:solver%grid%ny, 1:solver%grid%nz_local)
-      call h5_write_slab(file, name, interior, solver%grid%z_offset, shape3)
-    end subroutine write_interior
   end subroutine write_fluid_checkpoint
+
+  !> Into an open file: the velocity and pressure (fluid/u, v, w, pressure), fluid/grid_shape and
+  !> fluid/time: what &fluid init = 'file' reads (read_initial_field) on any rank count.
+  subroutine write_fluid_state(file, solver)
+    type(h5_file_t), intent(in) :: file
+    type(fluid_solver_t), intent(in) :: solver
+    call write_interior(file, 'fluid/u', solver%u, solver)
+    call write_interior(file, 'fluid/v', solver%v, solver)
+    call write_interior(file, 'fluid/w', solver%w, solver)
+    call write_interior(file, 'fluid/pressure', solver%pressure, solver)
+    call h5_write_array(file, 'fluid/grid_shape', [solver%grid%nx, solver%grid%ny, solver%grid%nz])
+    call h5_write_array(file, 'fluid/time', solver%time)
+  end subroutine write_fluid_state
+
+  subroutine write_interior(file, name, field, solver)
+    type(h5_file_t), intent(in) :: file
+    character(len=*), intent(in) :: name
+    real(wp), intent(in) :: field(0:, 0:, 0:)
+    type(fluid_solver_t), intent(in) :: solver
+    real(wp), allocatable :: interior(:, :, :)
+    interior = field(1:solver%grid%nx, 1:solver%grid%ny, 1:solver%grid%nz_local)
+    call h5_write_slab(file, name, interior, solver%grid%z_offset, [solver%grid%nx, solver%grid%ny, solver%grid%nz])
+  end subroutine write_interior
 
   !> The whole solver state from a checkpoint (any rank count: the slabs are re-cut on reading).
   subroutine read_fluid_checkpoint(solver, path)

@@ -16,8 +16,9 @@ module forcing_driver
   use file_system, only: file_exists, rename_file
   use parallel_env, only: is_root, barrier
   use hdf5_io, only: h5_file_t, h5_create, h5_open, h5_close, h5_exists, h5_append, h5_write_array, h5_read_array, &
-                     h5_write_slab, h5_truncate, h5_delete
+                     h5_truncate, h5_delete
   use fluid_solver, only: fluid_solver_t, fluid_advance
+  use fluid_restart, only: write_fluid_state
   use eswaran_pope_forcing, only: ep_forcing_t, forcing_init_on_grid, forcing_advance, forcing_set_fields, &
                                   forcing_power_input, forcing_pack_state, forcing_unpack_state
   use flow_statistics, only: flow_statistics_t, compute_flow_statistics
@@ -206,19 +207,10 @@ contains
     type(fluid_solver_t), intent(in) :: solver
     type(h5_file_t) :: file
     real(wp) :: rows
-    integer :: shape3(3)
     logical :: renamed
     if (.not. driver%active) return
-    shape3 = [solver%grid%nx, solver%grid%ny, solver%grid%nz]
     call h5_create(file, run_file('final_field.h5.tmp'))
-    associate (g => solver%grid)
-      call h5_write_slab(file, 'fluid/u', solver%u(1:g%nx, 1:g%ny, 1:g%nz_local), g%z_offset, shape3)
-      call h5_write_slab(file, 'fluid/v', solver%v(1:g%nx, 1:g%ny, 1:g%nz_local), g%z_offset, shape3)
-      call h5_write_slab(file, 'fluid/w', solver%w(1:g%nx, 1:g%ny, 1:g%nz_local), g%z_offset, shape3)
-      call h5_write_slab(file, 'fluid/pressure', solver%pressure(1:g%nx, 1:g%ny, 1:g%nz_local), g%z_offset, shape3)
-    end associate
-    call h5_write_array(file, 'fluid/grid_shape', shape3)
-    call h5_write_array(file, 'fluid/time', solver%time)
+    call write_fluid_state(file, solver)
     call h5_write_array(file, 'forcing/state', forcing_pack_state(driver%forcing))
     call h5_close(file)
     call barrier()
