@@ -3,24 +3,10 @@
 # the variable and what is allowed (docs/design.md, "Errors"). Runs the built executable ($AGGLO).
 set -u
 AGGLO=${AGGLO:?AGGLO must point to the built executable}
+. "$(cd "$(dirname "$0")" && pwd)/deck_error_lib.sh"
 work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
 cd "$work"
-export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
-
-# expect_error NAME RANKS DECK_TEXT PATTERN...: the run fails and its error output matches every pattern.
-expect_error() {
-  local name=$1 ranks=$2 text=$3; shift 3
-  printf '%s\n' "$text" > "$name.nml"
-  mpirun -np "$ranks" "$AGGLO" "$name.nml" > "$name.out" 2>&1; local status=$?
-  if [ $status -eq 0 ]; then echo "FAIL $name: exit status 0 for a bad deck"; return; fi
-  local pattern
-  for pattern in "$@"; do
-    if ! grep -q -- "$pattern" "$name.out"; then
-      echo "FAIL $name: message lacks '$pattern': $(grep 'agglo: error' "$name.out" | head -n 1)"; return
-    fi
-  done
-  echo "PASS $name  ($(grep -m1 'agglo: error' "$name.out" | cut -c1-150))"
-}
+expect_error() { expect_deck_error "$@"; }
 
 fluid='&scene fluid = '"'"'resolved'"'"' /
 &grid nx = 8, ny = 8, nz = 8 /'

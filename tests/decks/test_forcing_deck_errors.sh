@@ -3,6 +3,7 @@
 # variable and the allowed range (docs/decks.md, &forcing). Each case runs $AGGLO on a small deck
 # and greps the error; a good deck must pass the checks.
 set -u
+. "$(cd "$(dirname "$0")" && pwd)/deck_error_lib.sh"
 work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
 cd "$work"
 
@@ -10,18 +11,9 @@ run="&run name = 'f', end_time = 1.0e-4, dt = 1.0e-5, overwrite = .true. /"
 base="$run
 &grid nx = 8, ny = 8, nz = 8 /"
 
-# case name, expected text (fixed string), then the deck groups after &run/&grid
-expect_error() {
-  local name=$1 expected=$2 groups=$3
-  printf '%s\n%s\n' "$base" "$groups" > "$name.nml"
-  if "$AGGLO" "$name.nml" > "$name.out" 2>&1; then
-    echo "FAIL $name: the deck was accepted"
-  elif grep -qF -- "$expected" "$name.out"; then
-    echo "PASS $name  ($(grep -m1 'error' "$name.out" | cut -c1-150))"
-  else
-    echo "FAIL $name: message lacks \"$expected\": $(head -c 300 "$name.out")"
-  fi
-}
+# case name, expected text (fixed string), then the deck groups after the base
+expect_error() { expect_deck_error "$1" 1 "$base
+$3" "$2"; }
 
 forced="&scene fluid = 'resolved', forcing = 'eswaran_pope' /"
 expect_error kappa_f_below_kappa0 "&forcing kappa_f_ratio = 5.00000E-01 is not allowed" \

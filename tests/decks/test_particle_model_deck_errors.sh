@@ -3,23 +3,16 @@
 # naming the group, the variable, the value and the allowed range (docs/decks.md). Each case runs
 # $AGGLO on a small fluid-free pair deck and greps the error; the defaults must pass the checks.
 set -u
+. "$(cd "$(dirname "$0")" && pwd)/deck_error_lib.sh"
 work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
 cd "$work"
 
 base="&run name = 'p', end_time = 1.0e-6, dt = 1.0e-7, overwrite = .true. /
 &scene fluid = 'none', particles = 'pair' /"
 
-expect_error() {  # case name, expected text (fixed string), deck groups after the base
-  local name=$1 expected=$2 groups=$3
-  printf '%s\n%s\n' "$base" "$groups" > "$name.nml"
-  if "$AGGLO" "$name.nml" > "$name.out" 2>&1; then
-    echo "FAIL $name: the deck was accepted"
-  elif grep -qF -- "$expected" "$name.out"; then
-    echo "PASS $name  ($(grep -m1 'error' "$name.out" | cut -c1-150))"
-  else
-    echo "FAIL $name: message lacks \"$expected\": $(head -c 300 "$name.out")"
-  fi
-}
+# case name, expected text (fixed string), then the deck groups after the base
+expect_error() { expect_deck_error "$1" 1 "$base
+$3" "$2"; }
 
 expect_error restitution_above_one "&collision restitution = 1.50000E+00 is not allowed; allowed: [0.00000E+00, 1.00000E+00]" \
   "&collision restitution = 1.5 /"
