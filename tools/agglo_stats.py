@@ -360,6 +360,7 @@ def make_figures(runs, groups, directory, history_runs):
 
     # 6. Time histories of chosen runs.
     figure, (top, bottom) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
+    all_gaps = []
     for k, run in enumerate(history_runs):
         history = _histories(run)
         if history is None:
@@ -368,7 +369,14 @@ def make_figures(runs, groups, directory, history_runs):
         label = f"{run.label} ({run.group}, {run.summary['outcome']})"
         top.plot(time * 1e3, gap, color=f"C{k % 10}", label=label)
         bottom.plot(time * 1e3, velocity * 1e3, color=f"C{k % 10}")
-    top.set_yscale("symlog", linthresh=1.0e-9)
+        all_gaps.append(gap)
+    # Gaps spanning decades (contact at nanometres) need a log-like axis; a narrow positive range
+    # (pairs that never touch) reads better on a linear one, where symlog would show no ticks.
+    gaps_seen = np.concatenate(all_gaps) if all_gaps else np.empty(0)
+    if gaps_seen.size and gaps_seen.min() > 0 and gaps_seen.max() < 10 * gaps_seen.min():
+        top.set_yscale("linear")
+    else:
+        top.set_yscale("symlog", linthresh=1.0e-9)
     top.set_ylabel("surface separation h (m)")
     _legend_or_note(top, "no particles.h5 in the chosen runs")
     bottom.set_ylabel("relative velocity (mm/s)")
@@ -417,7 +425,7 @@ def parse_arguments(argv):
         prog="agglo-stats",
         description="Agglomeration statistics and figures of Agglo Monte-Carlo batches "
                     "(output roots of tools/montecarlo.sh). Prints per group the runs, outcomes "
-                    "and the agglomeration rate (agglomerated / runs) with its Wilson score 95%% "
+                    "and the agglomeration rate (agglomerated / runs) with its Wilson score 95% "
                     "interval; writes runs.csv, rates.csv and the figures (PNG and PDF).",
         epilog="Runs without summary.json (incomplete) or with a FAILED marker are skipped and "
                "counted. Exit status: 0 done, 1 no usable run or unreadable input, 2 usage.")
