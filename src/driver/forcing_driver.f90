@@ -207,18 +207,11 @@ contains
     type(fluid_solver_t), intent(in) :: solver
     type(h5_file_t) :: file
     real(wp) :: rows
-    logical :: renamed
     if (.not. driver%active) return
-    call h5_create(file, run_file('final_field.h5.tmp'))
+    call h5_create(file, run_file('final_field.h5'), complete_on_close=.true.)
     call write_fluid_state(file, solver)
     call h5_write_array(file, 'forcing/state', forcing_pack_state(driver%forcing))
-    call h5_close(file)
-    call barrier()
-    if (is_root()) then
-      call rename_file(run_file('final_field.h5.tmp'), run_file('final_field.h5'), renamed)
-      if (.not. renamed) call fatal('forcing: cannot rename final_field.h5.tmp in '//run_file(''), collective=.false.)
-    end if
-    call barrier()
+    call h5_close(file)   ! final_field.h5.tmp becomes final_field.h5 once complete
     call log_line('forcing: final field (for &fluid init = ''file'') in '//run_file('final_field.h5'))
     if (driver%averaged_rows == 0) return
     rows = real(driver%averaged_rows, wp)

@@ -70,7 +70,7 @@ contains
       if (.not. ok) call fatal('checkpoint_files: cannot create '//checkpoint_directory(), collective=.false.)
     end if
     call barrier()
-    call h5_create(file, checkpoint_path(step, temporary=.true.))
+    call h5_create(file, checkpoint_path(step), complete_on_close=.true.)
   end subroutine checkpoint_begin_i8
 
   subroutine checkpoint_begin_int(step, file)
@@ -83,16 +83,9 @@ contains
     type(h5_file_t), intent(inout) :: file
     integer(i8), intent(in) :: step
     integer, intent(in) :: checkpoints_kept     !< &output checkpoints_kept (>= 1)
-    logical :: ok
     if (checkpoints_kept < 1) call fatal('checkpoint_files: checkpoints_kept must be >= 1')
-    call h5_close(file)
-    call barrier()   ! every rank's data are in the file before it is declared complete
-    if (is_root()) then
-      call rename_file(checkpoint_path(step, temporary=.true.), checkpoint_path(step), ok)
-      if (.not. ok) call fatal('checkpoint_files: cannot rename '//checkpoint_path(step, temporary=.true.), &
-                               collective=.false.)
-      call prune(step, checkpoints_kept)
-    end if
+    call h5_close(file)   ! renames the .tmp file to its final name once every rank has written
+    if (is_root()) call prune(step, checkpoints_kept)
     call barrier()
   end subroutine checkpoint_commit_i8
 

@@ -106,7 +106,7 @@ contains
     snapshot%lengths = lengths
     snapshot%names = ''
     snapshot%locations = ''
-    call h5_create(snapshot%file, snapshot%directory//'/'//field_snapshot_name(step)//'.tmp')
+    call h5_create(snapshot%file, snapshot%directory//'/'//field_snapshot_name(step), complete_on_close=.true.)
   end subroutine snapshot_begin_i8
 
   subroutine snapshot_begin_int(snapshot, step, time, global_shape, lengths, directory)
@@ -142,8 +142,6 @@ contains
   !> Finish a snapshot (collective): metadata, close, rename complete, rebuild fields.xdmf.
   subroutine field_snapshot_end(snapshot)
     type(field_snapshot_t), intent(inout) :: snapshot
-    character(len=:), allocatable :: final_path
-    logical :: ok
     call h5_write_array(snapshot%file, 'time', snapshot%time)
     call h5_write_array(snapshot%file, 'step', snapshot%step)
     call h5_write_array(snapshot%file, 'grid/shape', snapshot%global_shape)
@@ -151,14 +149,8 @@ contains
     call h5_write_array(snapshot%file, 'grid/spacing', snapshot%lengths / real(snapshot%global_shape, wp))
     call h5_write_string(snapshot%file, 'field_names', snapshot%names)
     call h5_write_string(snapshot%file, 'field_locations', snapshot%locations)
-    call h5_close(snapshot%file)
-    call barrier()
-    if (is_root()) then
-      final_path = snapshot%directory//'/'//field_snapshot_name(snapshot%step)
-      call rename_file(final_path//'.tmp', final_path, ok)
-      if (.not. ok) call fatal('field_output: cannot rename '//final_path//'.tmp', collective=.false.)
-      call write_xdmf(snapshot%directory, snapshot%step)
-    end if
+    call h5_close(snapshot%file)   ! renames the .tmp file once every rank has written
+    if (is_root()) call write_xdmf(snapshot%directory, snapshot%step)
     call barrier()
   end subroutine field_snapshot_end
 

@@ -14,6 +14,9 @@
 !> Names may contain groups ("fluid/u", "forcing/state"); missing intermediate groups are created
 !> on write. Array shapes are given in Fortran order: h5dump and h5py show them reversed
 !> (a Fortran (nx, ny, nz) dataset is (nz, ny, nx) in h5py).
+!> h5_create(..., complete_on_close = .true.) writes <path>.tmp and h5_close renames it to <path>
+!> once every rank has written (checkpoints, snapshots, final fields): a killed run leaves at most
+!> a .tmp file, never a torn file under the final name.
 !> Call hdf5_io_finalize once before MPI_Finalize (the library is opened on first use).
 module hdf5_io
   use, intrinsic :: iso_c_binding, only: c_ptr, c_loc, c_char, c_null_char
@@ -32,8 +35,8 @@ module hdf5_io
   use mpi_f08, only: MPI_COMM_WORLD, MPI_INFO_NULL, MPI_Bcast, MPI_INTEGER8
   use agglo_kinds, only: wp, i8
   use error_handling, only: fatal
-  use file_system, only: file_exists
-  use parallel_env, only: my_rank
+  use file_system, only: file_exists, rename_file
+  use parallel_env, only: my_rank, barrier
   implicit none
   private
   public :: h5_file_t, h5_create, h5_open, h5_close, h5_flush, h5_exists, &
@@ -48,6 +51,7 @@ module hdf5_io
     logical :: serial = .false.              !< opened by this rank alone with the default driver
     logical :: writable = .false.
     character(len=:), allocatable :: path
+    character(len=:), allocatable :: complete_path   !< '' or the name path gets when the file is closed
   end type h5_file_t
 
   !> Write a real(wp) / integer / integer(i8) scalar or array (rank 0's values).
@@ -127,14 +131,22 @@ contains
   end subroutine make_property_lists
 
   !> Create (truncate) a file. Collective unless serial = .true. (then this rank alone).
-  subroutine h5_create(file, path, serial)
+  subroutine h5_create(file, path, serial, complete_on_close)
     type(h5_file_t), intent(out) :: file
     character(len=*), intent(in) :: path
     logical, intent(in), optional :: serial
+    logical, intent(in), optional :: complete_on_close   !< write path.tmp; h5_close renames it to path
     integer(hid_t) :: access
     integer :: status
     call open_library()
     file%path = trim(path)
+    file%complete_path = ''
+    if (present(complete_on_close)) then
+      if (complete_on_close) then
+        file%complete_path = trim(path)
+        file%path = trim(path)//'.tmp'
+      end if
+    end if
     file%serial = .false.
     if (present(serial)) file%serial = serial
     call make_property_lists(file, access)
@@ -174,6 +186,7 @@ contains
   subroutine h5_close(file)
     type(h5_file_t), intent(inout) :: file
     integer :: status
+    logical :: renamed
     if (.not. file%is_open) return
     call h5pclose_f(file%transfer, status)
     call h5fclose_f(file%id, status)
@@ -181,6 +194,18 @@ contains
     file%is_open = .false.
     file%id = -1_hid_t
     file%transfer = -1_hid_t
+    if (.not. allocated(file%complete_path)) return
+    if (len(file%complete_path) == 0) return
+    ! Complete only now: a run killed before this point leaves the .tmp name, never a torn file
+    ! under the final name (rename() is atomic on one file system).
+    if (.not. file%serial) call barrier()   ! every rank's data are in the file
+    if (file%serial .or. my_rank == 0) then
+      call rename_file(file%path, file%complete_path, renamed)
+      if (.not. renamed) call fatal('hdf5_io: cannot rename '//file%path//' to '//file%complete_path, collective=.false.)
+    end if
+    if (.not. file%serial) call barrier()   ! nobody reads the final name before it exists
+    file%path = file%complete_path
+    file%complete_path = ''
   end subroutine h5_close
 
   !> Push buffered data to the file system (the file stays open).

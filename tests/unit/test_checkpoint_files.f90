@@ -7,7 +7,7 @@ program test_checkpoint_files
   use agglo_config, only: agglo_config_t
   use run_directory, only: prepare_run_directory
   use checkpoint_files, only: checkpoint_begin, checkpoint_commit, newest_checkpoint, checkpoint_path
-  use hdf5_io, only: h5_file_t, h5_open, h5_close, h5_write_array, h5_read_array, h5_write_slab, &
+  use hdf5_io, only: h5_file_t, h5_create, h5_open, h5_close, h5_write_array, h5_read_array, h5_write_slab, &
                      h5_read_slab, hdf5_io_finalize
   use file_system, only: file_exists
   use parallel_env, only: parallel_start, my_rank, n_ranks, barrier
@@ -38,8 +38,9 @@ program test_checkpoint_files
   call check(index(newest, 'checkpoints/checkpoint_0000000020.h5') > 0, 'name_has_10_digit_step', newest)
   call check(.not. file_exists(checkpoint_path(20_i8, temporary=.true.)), 'tmp_renamed_on_commit')
 
-  ! A killed run: checkpoint 30 begun, data written, never committed (the .tmp stays behind).
-  call checkpoint_begin(30_i8, file)
+  ! A killed run: checkpoint 30 written to its temporary name, never completed (killed before the
+  ! close that renames it), so the .tmp file stays behind.
+  call h5_create(file, checkpoint_path(30_i8, temporary=.true.))
   call h5_write_array(file, 'step', 30_i8)
   call h5_close(file)
   call barrier()
