@@ -406,15 +406,17 @@ contains
     real(wp) :: local_dot
     logical :: replace
     integer :: at_x, at_y, at_z, i, j, k, m, n1, n2
-    complex(wp), allocatable :: plane(:,:), row_coefficient(:)
-    real(wp), allocatable :: row(:), row_re(:), row_im(:)
+    ! Work arrays on the stack (their sizes follow the forced band, a few entries): nothing is
+    ! allocated per call in the time loop.
+    complex(wp) :: plane(0:self%mode_extent(1), -self%mode_extent(2):self%mode_extent(2))
+    complex(wp) :: row_coefficient(0:self%mode_extent(1))
+    real(wp) :: row(self%nx), row_re(0:self%mode_extent(1)), row_im(0:self%mode_extent(1))
     replace = .false.
     if (present(overwrite)) replace = overwrite
     associate (m1 => self%mode_extent(1), m2 => self%mode_extent(2), nx => self%nx)
       at_x = merge(at_face, at_centre, component == 1)
       at_y = merge(at_face, at_centre, component == 2)
       at_z = merge(at_face, at_centre, component == 3)
-      allocate(plane(0:m1, -m2:m2), row_coefficient(0:m1), row(nx), row_re(0:m1), row_im(0:m1))
       local_dot = 0.0_wp
       do k = 1, self%nz_local
         ! plane(n1, n2) = sum over modes (n1, n2, n3) of 2 f^_c exp(i k3 z): the factor 2 is the
@@ -433,8 +435,10 @@ contains
           end do
           row_re = real(row_coefficient, wp)
           row_im = aimag(row_coefficient)
-          row = 0.0_wp
-          do n1 = 0, m1
+          ! Re(c e^{i k1 x}) summed over the n1 columns: the n1 = 0 column is the constant Re(c_0)
+          ! (e^0 = 1), then one vectorised multiply-add pass over the row per further column.
+          row = row_re(0)
+          do n1 = 1, m1
             do i = 1, nx
               row(i) = row(i) + (row_re(n1) * self%ex_re(i, n1, at_x) - row_im(n1) * self%ex_im(i, n1, at_x))
             end do
@@ -446,7 +450,7 @@ contains
               target(1:nx, j, k) = target(1:nx, j, k) + row
             end if
           end if
-          if (present(velocity)) local_dot = local_dot + sum(row * velocity(1:nx, j, k))
+          if (present(velocity)) local_dot = local_dot + dot_product(row, velocity(1:nx, j, k))
         end do
       end do
     end associate
