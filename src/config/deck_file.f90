@@ -6,6 +6,7 @@ module deck_file
   use mpi_f08, only: MPI_Bcast, MPI_INTEGER, MPI_CHARACTER, MPI_COMM_WORLD, MPI_Comm_rank
   use agglo_kinds, only: wp
   use error_handling, only: fatal, input_error
+  use text_format, only: real_text, int_text   ! passed on to the config modules
   implicit none
   private
   public :: deck_t, deck_line_length, deck_load, deck_check_groups, &
@@ -211,24 +212,4 @@ contains
     end do
     call input_error(group, variable, ''''//trim(value)//'''', 'one of '//allowed(4:))
   end subroutine require_option
-
-  function real_text(value) result(text)
-    real(wp), intent(in) :: value
-    character(len=:), allocatable :: text
-    character(len=32) :: buffer
-    if (value /= 0.0_wp .and. (abs(value) >= 1.0e100_wp .or. abs(value) < 1.0e-99_wp)) then
-      write(buffer, '(es13.5e3)') value     ! three exponent digits keep their "E"
-    else
-      write(buffer, '(es12.5)') value
-    end if
-    text = trim(adjustl(buffer))
-  end function real_text
-
-  function int_text(value) result(text)
-    integer, intent(in) :: value
-    character(len=:), allocatable :: text
-    character(len=16) :: buffer
-    write(buffer, '(i0)') value
-    text = trim(buffer)
-  end function int_text
 end module deck_file

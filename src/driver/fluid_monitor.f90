@@ -1,15 +1,14 @@
 !> What a resolved run tells its user while it runs: the fluid time series (fluid_statistics.dat),
 !> the progress line, and the per-step timing breakdown at the end.
 module fluid_monitor
-  use mpi_f08, only: MPI_Allreduce, MPI_IN_PLACE, MPI_SUM, MPI_MAX, MPI_MIN
   use agglo_kinds, only: wp, i8
   use logger, only: log_line
-  use parallel_env, only: is_root, world, mpi_wp, n_ranks
+  use parallel_env, only: is_root
   use wall_clock, only: format_duration
   use error_handling, only: fatal
   use file_system, only: rename_file
   use fluid_diagnostics, only: fluid_statistics_t
-  use fluid_solver, only: fluid_solver_t, timer_count, timer_names
+  use timer_registry, only: timer_breakdown
   implicit none
   private
   public :: statistics_open, statistics_write, statistics_close, progress_line, timing_report
@@ -93,31 +92,17 @@ contains
     call log_line(trim(line)//' '//trim(format_duration(seconds_per_step * steps_left)))
   end subroutine progress_line
 
-  !> Seconds per step of each category: min / mean / max over the ranks.
-  subroutine timing_report(solver, steps, total_seconds)
-    type(fluid_solver_t), intent(in) :: solver
+  !> Milliseconds per step of every registered timer and of the whole step: min / mean / max over
+  !> the ranks (collective).
+  subroutine timing_report(steps, total_seconds)
     integer(i8), intent(in) :: steps
     real(wp), intent(in) :: total_seconds
-    real(wp) :: smallest(timer_count + 1), mean(timer_count + 1), largest(timer_count + 1), mine(timer_count + 1)
-    character(len=160) :: line
-    integer :: c
+    character(len=80), allocatable :: lines(:)
+    integer :: n
     if (steps <= 0) return
-    mine(1:timer_count) = solver%timers / steps
-    mine(timer_count + 1) = total_seconds / steps
-    smallest = mine; mean = mine; largest = mine
-    call MPI_Allreduce(MPI_IN_PLACE, smallest, timer_count + 1, mpi_wp, MPI_MIN, world)
-    call MPI_Allreduce(MPI_IN_PLACE, mean, timer_count + 1, mpi_wp, MPI_SUM, world)
-    call MPI_Allreduce(MPI_IN_PLACE, largest, timer_count + 1, mpi_wp, MPI_MAX, world)
-    mean = mean / n_ranks
-    call log_line('timing per step (ms; min / mean / max over ranks):')
-    do c = 1, timer_count + 1
-      if (c <= timer_count) then
-        write(line, '(2x,a24,3f10.3)') timer_names(c), 1.0e3_wp * smallest(c), 1.0e3_wp * mean(c), 1.0e3_wp * largest(c)
-      else
-        write(line, '(2x,a24,3f10.3)') 'whole step (incl. other)', 1.0e3_wp * smallest(c), 1.0e3_wp * mean(c), &
-            1.0e3_wp * largest(c)
-      end if
-      call log_line(trim(line))
+    lines = timer_breakdown(steps, total_seconds)
+    do n = 1, size(lines)
+      call log_line(trim(lines(n)))
     end do
   end subroutine timing_report
 end module fluid_monitor

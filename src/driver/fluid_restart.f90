@@ -8,7 +8,7 @@
 module fluid_restart
   use agglo_kinds, only: wp, i8
   use error_handling, only: fatal
-  use deck_file, only: int_text
+  use text_format, only: int_text
   use hdf5_io, only: h5_file_t, h5_open, h5_close, h5_exists, h5_write_slab, h5_read_slab, h5_write_array, &
                      h5_read_array
   use checkpoint_files, only: checkpoint_begin, checkpoint_commit

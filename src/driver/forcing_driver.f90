@@ -9,7 +9,7 @@
 module forcing_driver
   use agglo_kinds, only: wp, i8
   use agglo_config, only: agglo_config_t
-  use deck_file, only: real_text, int_text
+  use text_format, only: real_text, int_text
   use logger, only: log_line
   use error_handling, only: fatal
   use run_directory, only: run_file

@@ -5,13 +5,14 @@ module resolved_scene
   use agglo_kinds, only: wp, i8
   use agglo_config, only: agglo_config_t
   use error_handling, only: fatal
-  use deck_file, only: real_text
+  use text_format, only: real_text
   use logger, only: log_line
   use wall_clock, only: wall_time
   use run_directory, only: run_file
   use checkpoint_files, only: newest_checkpoint
   use physical_constants, only: two_pi
-  use fluid_solver, only: fluid_solver_t, fluid_solver_create, timer_io
+  use timer_registry, only: timer_register, timer_tic, timer_toc
+  use fluid_solver, only: fluid_solver_t, fluid_solver_create
   use initial_fields, only: set_rest, set_taylor_green, set_random_field
   use fluid_diagnostics, only: fluid_statistics_t, compute_fluid_statistics, advective_rate
   use time_step_control, only: next_time_step, explicit_viscous_limit
@@ -31,11 +32,13 @@ contains
     type(fluid_statistics_t) :: stats
     type(forcing_driver_t) :: forcing   ! Eswaran-Pope body force and flow statistics (inactive when off)
     character(len=:), allocatable :: restart_path
-    real(wp) :: dt, rate, viscous_limit, next_field_time, start_wall, step_wall, t0
+    real(wp) :: dt, rate, viscous_limit, next_field_time, start_wall, step_wall
     integer(i8) :: first_step
+    integer :: timer_io
     logical :: finite
 
     call start_fluid(cfg, solver, restart_path)
+    timer_io = timer_register('I/O')
     call forcing_driver_start(forcing, cfg, solver, restart_path)
     viscous_limit = huge(1.0_wp)
     if (.not. solver%crank_nicolson) viscous_limit = explicit_viscous_limit(solver%grid%dx, solver%grid%dy, &
@@ -87,7 +90,7 @@ contains
         mod(solver%step, int(max(cfg%output%checkpoint_interval, 1), i8)) /= 0) call checkpoint(solver)
     call statistics_close()
     call forcing_driver_finish(forcing, solver)
-    call timing_report(solver, solver%step - first_step, wall_time() - start_wall)
+    call timing_report(solver%step - first_step, wall_time() - start_wall)
     call log_line('resolved scene: '//trim(cfg%run%name)//' reached t = '//real_text(solver%time)//' s; '// &
         'time series '//run_file('fluid_statistics.dat')//', fields '//run_file('fields.xdmf')// &
         ', checkpoints '//run_file('checkpoints'))
@@ -96,16 +99,16 @@ contains
 
     subroutine output_fields(solver)
       type(fluid_solver_t), intent(inout) :: solver
-      t0 = wall_time()
+      call timer_tic(timer_io)
       call write_fluid_snapshot(solver)
-      solver%timers(timer_io) = solver%timers(timer_io) + wall_time() - t0
+      call timer_toc(timer_io)
     end subroutine output_fields
 
     subroutine checkpoint(solver)
       type(fluid_solver_t), intent(inout) :: solver
-      t0 = wall_time()
+      call timer_tic(timer_io)
       call write_fluid_checkpoint(solver, cfg%output%checkpoints_kept, forcing_driver_state(forcing))
-      solver%timers(timer_io) = solver%timers(timer_io) + wall_time() - t0
+      call timer_toc(timer_io)
     end subroutine checkpoint
 
     !> A failed run still leaves its last field for a look in ParaView.
@@ -126,8 +129,7 @@ contains
     type(fluid_solver_t), intent(inout) :: solver
     character(len=:), allocatable, intent(out) :: path   ! the checkpoint restarted from ('' if none)
     path = ''
-    call fluid_solver_create(solver, cfg%grid%nx, cfg%grid%ny, cfg%grid%nz, cfg%grid%length_x, cfg%grid%length_y, &
-        cfg%grid%length_z, cfg%fluid%viscosity, cfg%fluid%density, cfg%fluid%viscous_scheme, cfg%fluid%fft_planning)
+    call fluid_solver_create(solver, cfg%grid, cfg%fluid)
     if (cfg%run%restart) then
       path = newest_checkpoint()
       if (len(path) == 0) call fatal('deck: &run restart = .true. but the run directory '//run_file('checkpoints')// &

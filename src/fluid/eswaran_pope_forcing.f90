@@ -27,7 +27,7 @@ module eswaran_pope_forcing
   use random_stream, only: random_stream_t, stream_seed, stream_normal, stream_pack, stream_unpack, &
                            stream_state_size
   use error_handling, only: fatal
-  use deck_file, only: real_text, int_text
+  use text_format, only: real_text, int_text
   use logger, only: log_line
   use parallel_env, only: global_sum
   use fluid_grid, only: fluid_grid_t

@@ -26,20 +26,17 @@
 !> are computed.
 module fluid_solver
   use agglo_kinds, only: wp, i8
+  use config_grid, only: grid_config_t
+  use config_fluid, only: fluid_config_t
   use fluid_grid, only: fluid_grid_t, grid_create, allocate_field
   use halo_exchange, only: exchange_slab_halos, exchange_z_halos, start_plane_shift, finish_plane_shift
   use poisson_fft, only: poisson_fft_t, poisson_create, poisson_solve_in_buffer, helmholtz_solve
   use momentum_terms, only: predictor_coefficients_t, predictor_plane, divergence_plane, correction_plane
   use wall_clock, only: wall_time
+  use timer_registry, only: timer_register, timer_add
   implicit none
   private
-  public :: fluid_solver_t, fluid_solver_create, fluid_advance, fluid_exchange_velocity, &
-            timer_names, timer_count, timer_explicit, timer_poisson, timer_halo, timer_io
-
-  integer, parameter :: timer_count = 4
-  integer, parameter :: timer_explicit = 1, timer_poisson = 2, timer_halo = 3, timer_io = 4
-  character(len=24), parameter :: timer_names(timer_count) = [character(len=24) :: &
-      'advection/diffusion', 'Poisson/projection', 'halo exchange', 'I/O']
+  public :: fluid_solver_t, fluid_solver_create, fluid_advance, fluid_exchange_velocity
 
   type :: fluid_solver_t
     type(fluid_grid_t) :: grid
@@ -61,23 +58,24 @@ module fluid_solver
     real(wp), allocatable :: explicit_u(:, :, :), explicit_v(:, :, :), explicit_w(:, :, :)
     real(wp), allocatable :: work(:, :, :)
     real(wp), allocatable :: phi_above(:, :)
-    real(wp) :: timers(timer_count) = 0             !< s accumulated per category on this rank
+    ! Handles of the solver's timers in the timer registry (core/timer_registry).
+    integer :: timer_explicit = 0, timer_poisson = 0, timer_halo = 0
   end type fluid_solver_t
 
 contains
 
-  !> Grid, FFT plans and every array of the solver (collective). The velocity starts at rest.
-  subroutine fluid_solver_create(solver, nx, ny, nz, lx, ly, lz, viscosity, density, viscous_scheme, &
-                                 fft_planning)
+  !> Grid, FFT plans and every array of the solver (collective), from the deck's &grid and &fluid
+  !> (box, cells, viscosity, density, viscous_scheme, fft_planning). The velocity starts at rest.
+  subroutine fluid_solver_create(solver, grid_cfg, fluid_cfg)
     type(fluid_solver_t), intent(inout) :: solver
-    integer, intent(in) :: nx, ny, nz
-    real(wp), intent(in) :: lx, ly, lz, viscosity, density
-    character(len=*), intent(in) :: viscous_scheme, fft_planning
-    call grid_create(solver%grid, nx, ny, nz, lx, ly, lz)
-    call poisson_create(solver%poisson, solver%grid, fft_planning)
-    solver%viscosity = viscosity
-    solver%density = density
-    solver%crank_nicolson = (viscous_scheme == 'crank_nicolson')
+    type(grid_config_t), intent(in) :: grid_cfg
+    type(fluid_config_t), intent(in) :: fluid_cfg
+    call grid_create(solver%grid, grid_cfg%nx, grid_cfg%ny, grid_cfg%nz, grid_cfg%length_x, grid_cfg%length_y, &
+                     grid_cfg%length_z)
+    call poisson_create(solver%poisson, solver%grid, trim(fluid_cfg%fft_planning))
+    solver%viscosity = fluid_cfg%viscosity
+    solver%density = fluid_cfg%density
+    solver%crank_nicolson = (fluid_cfg%viscous_scheme == 'crank_nicolson')
     call allocate_field(solver%grid, solver%u)
     call allocate_field(solver%grid, solver%v)
     call allocate_field(solver%grid, solver%w)
@@ -94,7 +92,9 @@ contains
     solver%phi_above = 0
     solver%has_history = .false.
     solver%dt_old = 0; solver%time = 0; solver%step = 0
-    solver%timers = 0
+    solver%timer_explicit = timer_register('advection/diffusion')
+    solver%timer_poisson = timer_register('Poisson/projection')
+    solver%timer_halo = timer_register('halo exchange')
   end subroutine fluid_solver_create
 
   !> Refresh the halos of u, v, w (collective; one z message per direction), timed as halo exchange.
@@ -103,7 +103,7 @@ contains
     real(wp) :: t0
     t0 = wall_time()
     call exchange_slab_halos(solver%grid%slab, solver%u, solver%v, solver%w)
-    solver%timers(timer_halo) = solver%timers(timer_halo) + wall_time() - t0
+    call timer_add(solver%timer_halo, wall_time() - t0)
   end subroutine fluid_exchange_velocity
 
   !> One step of length dt (collective). Optional body force (m/s^2) on the faces, added with
@@ -173,8 +173,8 @@ contains
       call divergence_plane(solver%grid, 1, solver%explicit_old_u, solver%explicit_old_v, solver%explicit_old_w, &
                             1.0_wp / dt, solver%poisson%real_view)
     end if
-    solver%timers(timer_explicit) = solver%timers(timer_explicit) + wall_time() - t0 - halo
-    solver%timers(timer_halo) = solver%timers(timer_halo) + halo
+    call timer_add(solver%timer_explicit, wall_time() - t0 - halo)
+    call timer_add(solver%timer_halo, halo)
 
     call project(solver, dt)
 
@@ -186,7 +186,7 @@ contains
     ! correction_plane refreshed the x-y halos; the z halos of u, v, w go in one message each way.
     t1 = wall_time()
     call exchange_z_halos(solver%grid%slab, solver%u, solver%v, solver%w)
-    solver%timers(timer_halo) = solver%timers(timer_halo) + wall_time() - t1
+    call timer_add(solver%timer_halo, wall_time() - t1)
     solver%dt_old = dt
     solver%has_history = .true.
     solver%time = solver%time + dt
@@ -247,8 +247,8 @@ contains
     call finish_plane_shift(solver%grid%slab, solver%phi_above, upward=.false.)
     halo = halo + wall_time() - t1
     call correct(nzl, solver%phi_above)
-    solver%timers(timer_poisson) = solver%timers(timer_poisson) + wall_time() - t0 - halo
-    solver%timers(timer_halo) = solver%timers(timer_halo) + halo
+    call timer_add(solver%timer_poisson, wall_time() - t0 - halo)
+    call timer_add(solver%timer_halo, halo)
 
   contains
 

@@ -27,6 +27,7 @@
 module field_output
   use agglo_kinds, only: wp, i8
   use error_handling, only: fatal
+  use text_format, only: real_text => exact_real_text
   use file_system, only: rename_file
   use parallel_env, only: is_root, barrier
   use run_directory, only: run_directory_path
@@ -364,13 +365,4 @@ contains
       end if
     end do
   end function words
-
-  !> A real with 17 significant digits (round trip of a double), no blanks.
-  function real_text(value) result(text)
-    real(wp), intent(in) :: value
-    character(len=:), allocatable :: text
-    character(len=32) :: buffer
-    write(buffer, '(es25.17e3)') value
-    text = trim(adjustl(buffer))
-  end function real_text
 end module field_output

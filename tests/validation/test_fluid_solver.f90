@@ -10,6 +10,8 @@ program test_fluid_solver
   use physical_constants, only: two_pi
   use parallel_env, only: parallel_start, global_sum, is_root
   use random_stream, only: random_stream_t, stream_seed, stream_normal
+  use config_grid, only: grid_config_t
+  use config_fluid, only: fluid_config_t
   use fluid_solver, only: fluid_solver_t, fluid_solver_create, fluid_advance
   use initial_fields, only: set_taylor_green, taylor_green_exact, set_random_field
   use fluid_diagnostics, only: fluid_statistics_t, compute_fluid_statistics
@@ -76,7 +78,9 @@ contains
     real(wp), allocatable :: fu(:, :, :), fv(:, :, :), fw(:, :, :)
     type(random_stream_t) :: stream
     integer :: i, j, k
-    call fluid_solver_create(solver, 32, 16, 8, 1.0_wp, 0.5_wp, 0.25_wp, 1.0e-6_wp, 1000.0_wp, 'explicit', 'estimate')
+    call fluid_solver_create(solver, grid_config_t(nx=32, ny=16, nz=8, length_x=1.0_wp, length_y=0.5_wp, length_z=0.25_wp), &
+                             fluid_config_t(viscosity=1.0e-6_wp, density=1000.0_wp, viscous_scheme='explicit', &
+                             fft_planning='estimate'))
     call allocate_field(solver%grid, fu); call allocate_field(solver%grid, fv); call allocate_field(solver%grid, fw)
     call stream_seed(stream, 5_i8)
     do k = 1, solver%grid%nz_local
@@ -116,8 +120,10 @@ contains
     real(wp), intent(in) :: dt
     character(len=*), intent(in) :: viscous_scheme
     integer :: s
-    call fluid_solver_create(solver, cells, cells, cells, length, length, length, 0.1_wp, 1.0_wp, viscous_scheme, &
-                             'estimate')
+    call fluid_solver_create(solver, grid_config_t(nx=cells, ny=cells, nz=cells, length_x=length, length_y=length, &
+                             length_z=length), &
+                             fluid_config_t(viscosity=0.1_wp, density=1.0_wp, viscous_scheme=viscous_scheme, &
+                             fft_planning='estimate'))
     call set_taylor_green(solver, amplitude)
     do s = 1, steps
       call fluid_advance(solver, dt)
@@ -145,7 +151,9 @@ contains
     type(fluid_solver_t) :: solver
     type(fluid_statistics_t) :: start, finish
     integer :: s
-    call fluid_solver_create(solver, 16, 16, 16, length, length, length, 0.0_wp, 1.0_wp, 'explicit', 'estimate')
+    call fluid_solver_create(solver, grid_config_t(nx=16, ny=16, nz=16, length_x=length, length_y=length, length_z=length), &
+                             fluid_config_t(viscosity=0.0_wp, density=1.0_wp, viscous_scheme='explicit', &
+                             fft_planning='estimate'))
     call set_random_field(solver, 3_i8, amplitude, 2.0_wp)
     call compute_fluid_statistics(solver, dt, start)
     do s = 1, nint(1.0_wp / dt)
@@ -163,8 +171,9 @@ contains
     type(fluid_statistics_t) :: before, after
     real(wp), parameter :: dt = 1.0e-3_wp
     integer :: s
-    call fluid_solver_create(solver, 16, 16, 16, length, length, length, 0.05_wp, 1.0_wp, 'crank_nicolson', &
-                             'estimate')
+    call fluid_solver_create(solver, grid_config_t(nx=16, ny=16, nz=16, length_x=length, length_y=length, length_z=length), &
+                             fluid_config_t(viscosity=0.05_wp, density=1.0_wp, viscous_scheme='crank_nicolson', &
+                             fft_planning='estimate'))
     call set_random_field(solver, 4_i8, amplitude, 2.0_wp)
     do s = 1, 5
       call fluid_advance(solver, dt)

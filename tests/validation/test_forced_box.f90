@@ -18,6 +18,8 @@ program test_forced_box
   use config_forcing, only: forcing_config_t
   use eswaran_pope_forcing, only: ep_forcing_t, forcing_init_on_grid, forcing_advance, forcing_set_fields, &
       forcing_power_input, forcing_pack_state, forcing_unpack_state
+  use config_grid, only: grid_config_t
+  use config_fluid, only: fluid_config_t
   use fluid_solver, only: fluid_solver_t, fluid_solver_create, fluid_advance
   use flow_statistics, only: flow_statistics_t, compute_flow_statistics
   use hdf5_io, only: h5_file_t, h5_create, h5_open, h5_close, h5_exists, h5_write_slab, hdf5_io_finalize
@@ -53,7 +55,8 @@ contains
     type(fluid_solver_t), intent(inout) :: solver
     type(ep_forcing_t), intent(inout) :: forcing
     real(wp), allocatable, intent(inout) :: fx(:,:,:), fy(:,:,:), fz(:,:,:)
-    call fluid_solver_create(solver, n, n, n, length, length, length, nu, rho, 'explicit', 'estimate')
+    call fluid_solver_create(solver, grid_config_t(nx=n, ny=n, nz=n, length_x=length, length_y=length, length_z=length), &
+                             fluid_config_t(viscosity=nu, density=rho, viscous_scheme='explicit', fft_planning='estimate'))
     call forcing_init_on_grid(forcing, cfg, 20250224, solver%grid)
     if (.not. allocated(fx)) allocate(fx, fy, fz, mold=solver%u)
   end subroutine setup

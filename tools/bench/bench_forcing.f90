@@ -11,6 +11,8 @@ program bench_forcing
   use wall_clock, only: wall_time
   use config_forcing, only: forcing_config_t
   use eswaran_pope_forcing, only: ep_forcing_t, forcing_init_on_grid, forcing_advance, forcing_set_fields
+  use config_grid, only: grid_config_t
+  use config_fluid, only: fluid_config_t
   use fluid_solver, only: fluid_solver_t, fluid_solver_create, fluid_advance
   use initial_fields, only: set_random_field
   implicit none
@@ -28,7 +30,8 @@ program bench_forcing
   call get_command_argument(2, argument); read(argument, *) repeats
   cfg%time_scale = 0.01_wp
   cfg%epsilon_star = 1.6e-4_wp          ! input/hit_box.nml
-  call fluid_solver_create(solver, n, n, n, length, length, length, nu, rho, 'crank_nicolson', 'estimate')
+  call fluid_solver_create(solver, grid_config_t(nx=n, ny=n, nz=n, length_x=length, length_y=length, length_z=length), &
+                           fluid_config_t(viscosity=nu, density=rho, viscous_scheme='crank_nicolson', fft_planning='estimate'))
   call set_random_field(solver, 7_i8, 7.7e-3_wp, 2.0_wp * two_pi / length)   ! the hit_box u_rms
   call forcing_init_on_grid(forcing, cfg, 20250224, solver%grid)
   allocate(fx, fy, fz, mold=solver%u)
