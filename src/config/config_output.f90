@@ -1,7 +1,8 @@
 !> Namelist group &output: where results go and how often each kind is written.
 module config_output
   use agglo_kinds, only: wp
-  use deck_file, only: deck_t, check_namelist_read, require_nonnegative, require_positive_int
+  use deck_file, only: deck_t, check_namelist_read, require_nonnegative, require_positive_int, int_text
+  use error_handling, only: input_error
   implicit none
   private
   public :: output_config_t, read_output_group, check_output_group, write_output_group
@@ -12,12 +13,15 @@ module config_output
     real(wp) :: field_interval = 0.0_wp       !< s of simulated time between field snapshots; 0 = start and end only
     integer :: checkpoint_interval = 0        !< steps between checkpoints; 0 = only at the end
     integer :: checkpoints_kept = 2           !< older complete checkpoints are deleted beyond this
+    integer :: flow_statistics_interval = 0   !< steps between flow-statistics rows in any resolved run;
+                                              !< 0 = &forcing statistics_interval if forced, else none
   end type output_config_t
 
   character(len=256) :: directory
-  integer :: stats_interval, checkpoint_interval, checkpoints_kept
+  integer :: stats_interval, checkpoint_interval, checkpoints_kept, flow_statistics_interval
   real(wp) :: field_interval
-  namelist /output/ directory, stats_interval, field_interval, checkpoint_interval, checkpoints_kept
+  namelist /output/ directory, stats_interval, field_interval, checkpoint_interval, checkpoints_kept, &
+                    flow_statistics_interval
 
 contains
 
@@ -25,12 +29,14 @@ contains
     type(output_config_t), intent(in) :: cfg
     directory = cfg%directory; stats_interval = cfg%stats_interval; field_interval = cfg%field_interval
     checkpoint_interval = cfg%checkpoint_interval; checkpoints_kept = cfg%checkpoints_kept
+    flow_statistics_interval = cfg%flow_statistics_interval
   end subroutine to_namelist
 
   subroutine from_namelist(cfg)
     type(output_config_t), intent(inout) :: cfg
     cfg%directory = directory; cfg%stats_interval = stats_interval; cfg%field_interval = field_interval
     cfg%checkpoint_interval = checkpoint_interval; cfg%checkpoints_kept = checkpoints_kept
+    cfg%flow_statistics_interval = flow_statistics_interval
   end subroutine from_namelist
 
   subroutine read_output_group(deck, cfg)
@@ -50,6 +56,8 @@ contains
     call require_nonnegative('output', 'field_interval', cfg%field_interval)
     if (cfg%checkpoint_interval /= 0) call require_positive_int('output', 'checkpoint_interval', cfg%checkpoint_interval)
     call require_positive_int('output', 'checkpoints_kept', cfg%checkpoints_kept)
+    if (cfg%flow_statistics_interval < 0) call input_error('output', 'flow_statistics_interval', &
+        int_text(cfg%flow_statistics_interval), '>= 0 (steps between flow-statistics rows; 0 = as &forcing says)')
   end subroutine check_output_group
 
   subroutine write_output_group(unit, cfg)

@@ -19,7 +19,9 @@ module resolved_scene
   use fluid_restart, only: write_fluid_checkpoint, read_fluid_checkpoint, write_fluid_snapshot, read_initial_field
   use fluid_monitor, only: statistics_open, statistics_write, statistics_close, progress_line, timing_report
   use forcing_driver, only: forcing_driver_t, forcing_driver_start, forced_fluid_advance, &
-                            forcing_driver_statistics, forcing_driver_state, forcing_driver_finish
+                            forcing_driver_power_input, forcing_driver_state, forcing_driver_finish
+  use flow_statistics_output, only: flow_output_t, flow_output_start, flow_output_due, flow_output_record, &
+                                    flow_output_finish
   implicit none
   private
   public :: run_resolved_scene
@@ -30,7 +32,8 @@ contains
     type(agglo_config_t), intent(in) :: cfg
     type(fluid_solver_t) :: solver
     type(fluid_statistics_t) :: stats
-    type(forcing_driver_t) :: forcing   ! Eswaran-Pope body force and flow statistics (inactive when off)
+    type(forcing_driver_t) :: forcing   ! Eswaran-Pope body force (inactive when off)
+    type(flow_output_t) :: flow         ! flow statistics (u_rms, epsilon, Re_lambda, spectrum), if switched on
     character(len=:), allocatable :: restart_path
     real(wp) :: dt, rate, viscous_limit, next_field_time, start_wall, step_wall
     integer(i8) :: first_step
@@ -40,6 +43,7 @@ contains
     call start_fluid(cfg, solver, restart_path)
     timer_io = timer_register('I/O')
     call forcing_driver_start(forcing, cfg, solver, restart_path)
+    call flow_output_start(flow, cfg, solver)
     viscous_limit = huge(1.0_wp)
     if (.not. solver%crank_nicolson) viscous_limit = explicit_viscous_limit(solver%grid%dx, solver%grid%dy, &
                                                                             solver%grid%dz, solver%viscosity)
@@ -70,7 +74,8 @@ contains
         call compute_fluid_statistics(solver, dt, stats)
         call statistics_write(solver%step, solver%time, dt, stats)
       end if
-      call forcing_driver_statistics(forcing, solver, cfg%fluid%viscosity)
+      if (flow_output_due(flow, solver%step)) call flow_output_record(flow, solver, &
+                                                                     forcing_driver_power_input(forcing, solver))
       if (mod(solver%step, int(cfg%run%progress_interval, i8)) == 0) then
         call progress_line(solver%step, solver%time, dt, (wall_time() - step_wall) / cfg%run%progress_interval, &
             min(real(cfg%run%max_steps - solver%step, wp), (cfg%run%end_time - solver%time) / dt))
@@ -90,6 +95,7 @@ contains
         mod(solver%step, int(max(cfg%output%checkpoint_interval, 1), i8)) /= 0) call checkpoint(solver)
     call statistics_close()
     call forcing_driver_finish(forcing, solver)
+    call flow_output_finish(flow)
     call timing_report(solver%step - first_step, wall_time() - start_wall)
     call log_line('resolved scene: '//trim(cfg%run%name)//' reached t = '//real_text(solver%time)//' s; '// &
         'time series '//run_file('fluid_statistics.dat')//', fields '//run_file('fields.xdmf')// &

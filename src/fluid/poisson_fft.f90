@@ -25,7 +25,7 @@ module poisson_fft
   implicit none
   private
   public :: poisson_fft_t, poisson_create, poisson_destroy, poisson_solve, poisson_solve_in_buffer, &
-            helmholtz_solve, spectral_filter, fft_round_trip, spectral_weight
+            helmholtz_solve, spectral_filter, fft_round_trip, spectral_weight, forward
 
   !> A weight as a function of the physical wavenumber magnitude |k| (1/m), for spectral_filter.
   abstract interface
@@ -118,7 +118,8 @@ contains
                                               solver%wave_x, solver%wave_y, solver%wave_z)
   end subroutine poisson_destroy
 
-  !> Copy the interior of a halo field into the real view and transform forward.
+  !> Copy the interior of a halo field into the real view and transform forward (also the flow
+  !> statistics' spectrum: spectral_view then holds the unnormalised transform).
   subroutine forward(solver, field)
     type(poisson_fft_t), intent(inout) :: solver
     real(wp), intent(in) :: field(0:, 0:, 0:)

@@ -12,13 +12,14 @@ program test_flow_statistics
   use agglo_kinds, only: wp
   use physical_constants, only: pi, two_pi
   use parallel_env, only: parallel_start
-  use fluid_grid, only: fluid_grid_t, grid_create, allocate_field
+  use config_grid, only: grid_config_t
+  use config_fluid, only: fluid_config_t
+  use fluid_solver, only: fluid_solver_t, fluid_solver_create
   use flow_statistics, only: flow_statistics_t, compute_flow_statistics
   use test_framework, only: test_start, test_finish, check_close, check_below
   implicit none
-  type(fluid_grid_t) :: grid
+  type(fluid_solver_t) :: solver
   type(flow_statistics_t) :: stats
-  real(wp), allocatable :: u(:,:,:), v(:,:,:), w(:,:,:)
   integer, parameter :: n = 16
   real(wp), parameter :: length = 1.0e-3_wp, nu = 1.0e-6_wp
   real(wp), parameter :: u0 = 3.0e-3_wp, a = 2.0e-3_wp, b = 1.0e-3_wp, c = 1.5e-3_wp
@@ -27,21 +28,21 @@ program test_flow_statistics
 
   call parallel_start()
   call test_start('flow_statistics')
-  call grid_create(grid, n, n, n, length, length, length)
-  call allocate_field(grid, u); call allocate_field(grid, v); call allocate_field(grid, w)
+  call fluid_solver_create(solver, grid_config_t(nx=n, ny=n, nz=n, length_x=length, length_y=length, length_z=length), &
+                           fluid_config_t(viscosity=nu))
   h = length / n
   kappa0 = two_pi / length
-  do k = 1, grid%nz_local
-    kg = grid%z_offset + k
+  do k = 1, solver%grid%nz_local
+    kg = solver%grid%z_offset + k
     do j = 1, n
       do i = 1, n
-        u(i, j, k) = u0 + a * sin(kappa0 * (j - 0.5_wp) * h)
-        v(i, j, k) = b * cos(3 * kappa0 * kg * h)
-        w(i, j, k) = c * sin(2 * kappa0 * (i - 0.5_wp) * h)
+        solver%u(i, j, k) = u0 + a * sin(kappa0 * (j - 0.5_wp) * h)
+        solver%v(i, j, k) = b * cos(3 * kappa0 * kg * h)
+        solver%w(i, j, k) = c * sin(2 * kappa0 * (i - 0.5_wp) * h)
       end do
     end do
   end do
-  call compute_flow_statistics(stats, grid, u, v, w, nu, power_input=1.0e-3_wp)
+  call compute_flow_statistics(stats, solver, power_input=1.0e-3_wp)
 
   call check_close(stats%mean_velocity(1), u0, 1.0e-12_wp, 'mean_u')
   call check_close(stats%u_rms_component(1), a / sqrt(2.0_wp), 1.0e-12_wp, 'u_rms_x_mean_removed')

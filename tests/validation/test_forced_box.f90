@@ -92,11 +92,11 @@ contains
       call forced_step(solver, forcing, fx, fy, fz)
     end do
     mean_power = 0; mean_dissipation = 0; samples = 0; mean_u_rms = 0; mean_re_lambda = 0; mean_force_squared = 0
-    call compute_flow_statistics(stats, solver%grid, solver%u, solver%v, solver%w, nu)
+    call compute_flow_statistics(stats, solver)
     energy_start = stats%kinetic_energy + 0.5_wp * sum(stats%mean_velocity**2)
     do step = 1, window_steps
       ! P^n = <f^n . u^n> and epsilon^n at the start of each step: the rates of the step's energy change.
-      call compute_flow_statistics(stats, solver%grid, solver%u, solver%v, solver%w, nu)
+      call compute_flow_statistics(stats, solver)
       call forced_step(solver, forcing, fx, fy, fz, power, force_squared)
       mean_power = mean_power + power
       mean_force_squared = mean_force_squared + force_squared
@@ -105,7 +105,7 @@ contains
       mean_re_lambda = mean_re_lambda + stats%re_lambda
       samples = samples + 1
     end do
-    call compute_flow_statistics(stats, solver%grid, solver%u, solver%v, solver%w, nu)
+    call compute_flow_statistics(stats, solver)
     energy_end = stats%kinetic_energy + 0.5_wp * sum(stats%mean_velocity**2)
     mean_power = mean_power / samples; mean_dissipation = mean_dissipation / samples
     mean_force_squared = mean_force_squared / samples

@@ -70,7 +70,7 @@ deck killed 55 .false. 20 > killed1.nml
 deck killed 60 .true. 20 > killed2.nml
 if run 2 killed1.nml && rm -f killed/checkpoints/checkpoint_0000000055.h5 && run 2 killed2.nml; then
   if grep -q 'continuing from .*checkpoint_0000000040.h5' killed2.nml.out \
-     && grep -q 'forcing: 1 rows after step 40 (written after the checkpoint) dropped' killed2.nml.out \
+     && grep -q 'flow statistics: 1 rows after step 40 (written after the checkpoint) dropped' killed2.nml.out \
      && series_equal killed && h5diff -q "$(final_checkpoint whole)" "$(final_checkpoint killed)" >> killed.diff 2>&1; then
     echo "PASS forced_runs/restart_after_kill_drops_rows_past_checkpoint  (from step 40: row and spectrum of step 50 rewritten once; series and final checkpoint = uninterrupted run)"
   else
