@@ -26,6 +26,7 @@ for n in 64 128; do
     echo "$line" | awk -v n=$n '{ printf "%s  %10.1f  %11.2f  %8.2f\n", $0, $5 * 1e6 / (n^3), $4 / $3, $5 / $3 }'
   done
 done
+echo "Timer registry, last run above ($n^3, $ranks ranks; averages over its steps, not medians): $(cat "$work/timer_breakdown.txt")"
 fi
 
 # Eswaran-Pope forcing per step against a whole Crank-Nicolson fluid step (input/hit_box.nml);

@@ -1,4 +1,4 @@
-!> Wall-clock timers for the progress line and the per-step timing breakdown.
+!> Wall-clock readings (the progress line, the timer registry) and durations as text.
 module wall_clock
   use agglo_kinds, only: wp, i8
   implicit none
