@@ -11,6 +11,7 @@ module flow_statistics_output
   use text_format, only: real_text, int_text
   use logger, only: log_line
   use run_directory, only: run_file
+  use timer_registry, only: timer_tic, timer_toc
   use file_system, only: file_exists
   use hdf5_io, only: h5_file_t, h5_create, h5_open, h5_close, h5_exists, h5_append, h5_write_array, h5_read_array, &
                      h5_truncate, h5_delete
@@ -117,7 +118,9 @@ contains
     type(fluid_solver_t), intent(inout) :: solver
     real(wp), intent(in) :: power_input
     type(h5_file_t) :: file
+    call timer_tic('flow statistics')
     call compute_flow_statistics(output%stats, solver, power_input)
+    call timer_toc('flow statistics')
     associate (s => output%stats)
       call h5_open(file, output%path, writable=.true.)
       call h5_append(file, 'time', [solver%time])

@@ -12,6 +12,7 @@ module forcing_driver
   use logger, only: log_line
   use error_handling, only: fatal
   use run_directory, only: run_file
+  use timer_registry, only: timer_tic, timer_toc
   use hdf5_io, only: h5_file_t, h5_create, h5_open, h5_close, h5_exists, h5_write_array, h5_read_array
   use fluid_solver, only: fluid_solver_t, fluid_advance
   use fluid_restart, only: write_fluid_state
@@ -65,9 +66,13 @@ contains
       call fluid_advance(solver, dt)
       return
     end if
+    call timer_tic('forcing')
     call forcing_set_fields(driver%forcing, driver%fx, driver%fy, driver%fz)
+    call timer_toc('forcing')
     call fluid_advance(solver, dt, driver%fx, driver%fy, driver%fz)
+    call timer_tic('forcing')
     call forcing_advance(driver%forcing, dt)
+    call timer_toc('forcing')
   end subroutine forced_fluid_advance
 
   !> <f.u> (m^2/s^3) of the current velocity with f at the current time level; 0 when the forcing
