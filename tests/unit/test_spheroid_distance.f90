@@ -3,8 +3,9 @@
 !> Newton polish of the Lagrange conditions X - p + lambda D X = 0, X.D X = 1 with D = diag(a, b, b)^-2,
 !> from the best samples; it uses neither the meridian-plane reduction nor the bisection; for points
 !> within 1e-6 r of the axis, where that system is singular along the circle of symmetry, dense
-!> sampling and Newton in the meridian angle instead), for points inside and outside, near the surface, near and on the axis, at the centre, for spheres,
-!> needles and disks of aspect ratio 5 and 20 and near-spheres. Tolerance 1e-12 r (docs/theory.md,
+!> sampling and Newton in the meridian angle instead), for points inside and outside, near the
+!> surface, near and on the axis, at the centre, for spheres, needles and disks of aspect ratio 5
+!> and 20 and near-spheres. Tolerance 1e-12 r (docs/theory.md,
 !> "Immersed boundary geometry"; the immersed-boundary validation ladder, rung 1).
 program test_spheroid_distance
   use agglo_kinds, only: wp, i8
