@@ -334,7 +334,7 @@ contains
     integer, intent(inout) :: owner(:, :, k_first:)
     logical, intent(out) :: near_x(:), near_y(:), near_z(k_first:)
     integer :: n, i, j, k, previous
-    real(wp) :: box(3), extent(3), x(3), d(3), d_previous, d_new, rotation(3, 3), inverse_squares(3), y(3)
+    real(wp) :: box(3), extent(3), x(3), d(3), d_previous, d_new, rotation(3, 3)
     logical, allocatable :: in_x(:), in_y(:)
     real(wp), allocatable :: sep_x(:), sep_y(:)
     type(surface_projection_t) :: p_new, p_old
@@ -348,7 +348,6 @@ contains
     do n = 1, size(bodies)
       extent = lab_half_extent(bodies(n))
       rotation = rotation_matrix(bodies(n)%orientation)
-      inverse_squares = [1.0_wp / bodies(n)%shape%a**2, 1.0_wp / bodies(n)%shape%b**2, 1.0_wp / bodies(n)%shape%b**2]
       do i = 1, grid%nx
         x = node_position(grid, component, i, 1, 1)
         sep_x(i) = minimum_image(x(1) - bodies(n)%centre(1), box(1))
@@ -372,9 +371,8 @@ contains
           do i = 1, grid%nx
             if (.not. in_x(i)) cycle
             d(1) = sep_x(i)
-            ! Inside test: the implicit function (spheroid.f90) of the body-frame point R^T d.
-            y = matmul(d, rotation)
-            if (.not. (sum(inverse_squares * y**2) < 1.0_wp)) cycle
+            ! Inside test on the body-frame point R^T d.
+            if (.not. (implicit_function(bodies(n)%shape, matmul(d, rotation)) < 0.0_wp)) cycle
             previous = owner(i, j, k)
             if (previous == 0) then
               owner(i, j, k) = n

@@ -12,7 +12,7 @@ program test_immersed_geometry
   use spheroid, only: make_spheroid
   use fluid_grid, only: fluid_grid_t, grid_create
   use immersed_geometry, only: immersed_body_t, immersed_options_t, immersed_geometry_t, classify_nodes, &
-                               minimum_image, thin_dimension_cells
+                               minimum_image, thin_dimension_cells, node_position
   use immersed_reference, only: record_errors_t, check_geometry_against_reference
   use wall_clock, only: wall_time
   use test_framework, only: test_start, test_finish, check, check_close, check_below, check_above, check_equal
@@ -165,6 +165,21 @@ program test_immersed_geometry
   end do
   call report_errors(errors, 'two_spheres', .true.)
 
+  ! --- Overlapping spheres (centres 0.8 D apart): a node inside both belongs to the body whose
+  ! surface is nearer; the classification (solid = inside either) still equals the reference.
+  errors = record_errors_t()
+  bodies(1)%shape = make_spheroid('sphere', 5.0_wp * dx, density)
+  bodies(2)%shape = bodies(1)%shape
+  bodies(1)%centre = grid%lx * [stream_uniform(stream), stream_uniform(stream), stream_uniform(stream)]
+  bodies(2)%centre = bodies(1)%centre + 8.0_wp * dx * [0.6_wp, 0.0_wp, 0.8_wp]
+  call classify_nodes(grid, bodies, mirror_options, geometry)
+  call check_geometry_against_reference(grid, bodies, .true., geometry, errors)
+  call check_equal(errors%status_mismatches + errors%list_mismatches, 0, 'overlap_status_equals_reference')
+  call check_equal(wrong_owners(geometry, bodies), 0, 'overlap_nodes_belong_to_nearest_surface')
+  write(*, '(a,3i5,a,3i5)') 'overlapping spheres: fallbacks ', geometry%component(:)%n_fallback, &
+      '; of which surface point inside the other body ', geometry%component(:)%n_overlap
+  call check_above(real(sum(geometry%component(:)%n_overlap), wp), 1.0_wp, 'overlap_surface_point_inside_other_counted')
+
   ! --- Thin dimension of the paper's disk (r = 50 um, aspect 1/5: thickness 2a = 2 r 5^(-2/3) =
   ! 34.2 um) on a 1 mm box: ibm-notes section 0 gives 2.2, 4.4, 8.8 cells at 64^3, 128^3, 256^3.
   one(1)%shape = make_spheroid('disk', paper_radius, density)
@@ -212,6 +227,44 @@ contains
     call check_below(e%linear_field, 1.0e-12_wp, label//'_stencil_exact_for_linear_field')
     call check_above(e%min_outside, 0.0_wp, label//'_M_outside_every_body')
   end subroutine report_errors
+
+  !> Ghost and interior nodes whose body is not the one with the nearest surface among the bodies
+  !> that contain them.
+  integer function wrong_owners(geometry, bodies) result(wrong)
+    type(immersed_geometry_t), intent(in) :: geometry
+    type(immersed_body_t), intent(in) :: bodies(:)
+    integer :: c, g, n, best
+    real(wp) :: x(3), depth, best_depth, box(3)
+    box = [grid%lx, grid%ly, grid%lz]
+    wrong = 0
+    do c = 1, 3
+      do g = 1, geometry%component(c)%n_ghost + geometry%component(c)%n_interior
+        if (g <= geometry%component(c)%n_ghost) then
+          x = node_position(grid, c, geometry%component(c)%ghost(g)%node(1), geometry%component(c)%ghost(g)%node(2), &
+                            geometry%component(c)%ghost(g)%node(3))
+        else
+          x = node_position(grid, c, geometry%component(c)%interior(1, g - geometry%component(c)%n_ghost), &
+                            geometry%component(c)%interior(2, g - geometry%component(c)%n_ghost), &
+                            geometry%component(c)%interior(3, g - geometry%component(c)%n_ghost))
+        end if
+        best = 0
+        best_depth = huge(1.0_wp)
+        do n = 1, size(bodies)
+          ! Sphere: depth R - |x - centre| at the minimum image.
+          depth = bodies(n)%shape%radius - norm2(minimum_image(x - bodies(n)%centre, box))
+          if (depth > 0.0_wp .and. depth < best_depth) then
+            best = n
+            best_depth = depth
+          end if
+        end do
+        if (g <= geometry%component(c)%n_ghost) then
+          if (geometry%component(c)%ghost(g)%body /= best) wrong = wrong + 1
+        else
+          if (geometry%component(c)%interior_body(g - geometry%component(c)%n_ghost) /= best) wrong = wrong + 1
+        end if
+      end do
+    end do
+  end function wrong_owners
 
   !> Node-by-node comparison of a classification with the same body shifted by `shift` cells.
   subroutine compare_shifted(a, b, shift, mismatches, worst)
