@@ -9,8 +9,9 @@
 !> - Ghost: a solid node with at least one fluid node among its 6 neighbours on the same
 !>   component's grid. Interior: every other solid node. Fluid: not solid.
 !> - Ghost node G, closest surface point B, outward normal n, d_G = |G - B|: image point
-!>   M = B + d_M n, with d_M = d_G (the pure mirror, M = 2B - G; Mark & van Wachem 2008, Eq. 7) or
-!>   d_M = max(d_G, image_distance_cells h_max) (the image point of the explicit coupling).
+!>   M = B + d_M n, with d_M = d_G (the pure mirror, M = 2B - G: the exterior point of the paper's
+!>   Eq. 7, u_G = 2 u_IB - u_E, after Mark & van Wachem 2008) or d_M = max(d_G, image_distance_cells
+!>   h_max) (the image point of the explicit coupling).
 !>   The ghost condition is u_G = u_B - kappa (u_M - u_B), kappa = d_G/d_M.
 !> - If the segment from B to M enters another body (a gap below about two cells), M is moved back
 !>   along n to the middle of the gap, d_M = s/2 with s the distance from B to the other body
@@ -403,7 +404,7 @@ contains
     integer, intent(in) :: ghost_nodes(:, :)     !< i, j, k of this rank's ghosts (for the stencil's ghost links)
     type(ghost_node_t), intent(inout) :: ghost
     type(surface_projection_t) :: projection
-    real(wp) :: box(3), spacing(3), centre(3), entry, fraction(3), t(3), w(0:1, 3)
+    real(wp) :: box(3), spacing(3), centre(3), nearest_entry, fraction(3), t(3), w(0:1, 3)
     integer :: n, corner, bits(3), node(3), d
     type(immersed_body_t) :: body
 
@@ -424,16 +425,16 @@ contains
       ghost%image_distance = ghost%distance
     end if
 
-    ! Fallback: the segment B -> B + d_M n must not enter another body.
-    ghost%fallback = .false.
+    ! Fallback: the segment B -> B + d_M n must not enter another body; if it does, M goes to the
+    ! middle of the gap to the nearest body along n.
+    nearest_entry = huge(1.0_wp)
     do n = 1, size(bodies)
       if (n == ghost%body) cycle
-      entry = segment_entry(bodies(n), box, ghost%surface_point, ghost%normal, ghost%image_distance)
-      if (entry < ghost%image_distance) then
-        ghost%fallback = .true.
-        ghost%image_distance = 0.5_wp * entry
-      end if
+      nearest_entry = min(nearest_entry, &
+                          segment_entry(bodies(n), box, ghost%surface_point, ghost%normal, ghost%image_distance))
     end do
+    ghost%fallback = nearest_entry < ghost%image_distance
+    if (ghost%fallback) ghost%image_distance = 0.5_wp * nearest_entry
     ghost%image_point = ghost%surface_point + ghost%image_distance * ghost%normal
     if (ghost%image_distance > 0.0_wp) then
       ghost%extrapolation = ghost%distance / ghost%image_distance

@@ -27,7 +27,7 @@ program test_immersed_geometry
   real(wp) :: dx, diameter, r_cells, solid_low, solid_high, ghost_low, ghost_high, t0, elapsed, gap, u(3)
   real(wp) :: worst_solid_margin, worst_ghost_margin, spread_ghost, spread_interior, worst_shift
   integer :: n_cells, size_index, trial, c, n_solid, count_min(3), count_max(3), interior_min(3), interior_max(3)
-  integer :: shift(3), mismatches, n_fallback
+  integer :: shift(3), mismatches, n_fallback, n_records
   real(wp), parameter :: diameters(4) = [8.0_wp, 10.0_wp, 12.0_wp, 16.0_wp]
   character(len=160) :: line
 
@@ -106,6 +106,7 @@ program test_immersed_geometry
   dx = grid%dx
   errors = record_errors_t()
   image_errors = record_errors_t()
+  n_records = 0
   do trial = 1, 8
     if (mod(trial, 2) == 0) then
       one(1)%shape = make_spheroid('disk', paper_radius, density)
@@ -116,13 +117,14 @@ program test_immersed_geometry
     one(1)%orientation = random_orientation(stream)
     call classify_nodes(grid, one, mirror_options, geometry)
     call check_geometry_against_reference(grid, one, .true., geometry, errors)
+    n_records = n_records + sum(geometry%component(:)%n_ghost)
     call classify_nodes(grid, one, image_options, geometry)
     call check_geometry_against_reference(grid, one, .false., geometry, image_errors)
   end do
   call report_errors(errors, 'needle_disk_mirror', .true.)
   call report_errors(image_errors, 'needle_disk_image', .false.)
-  write(*, '(a,i0,a,i0)') 'needle/disk: ghost nodes in stencils (weight > 0), mirror: ', errors%ghosts_in_stencils, &
-      ', image point: ', image_errors%ghosts_in_stencils
+  write(*, '(a,i0,a,i0,a,i0,a)') 'needle/disk: ghost nodes in stencils (weight > 0), mirror: ', errors%ghosts_in_stencils, &
+      ', image point: ', image_errors%ghosts_in_stencils, ' (', n_records, ' ghost records)'
   write(*, '(a,i0,a,i0)') 'needle/disk: records with G in its own stencil, mirror: ', errors%self_in_stencils, &
       ', image point: ', image_errors%self_in_stencils
   ! The pure mirror's stencil holds ghost nodes and G itself (that is why its rows are coupled).
