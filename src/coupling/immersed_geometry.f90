@@ -182,11 +182,11 @@ contains
   !> Half-extents (m) of a body along the lab axes: the support function along each axis.
   pure function lab_half_extent(body) result(extent)
     type(immersed_body_t), intent(in) :: body
-    real(wp) :: extent(3), r(3, 3)
+    real(wp) :: extent(3), lab_axes_in_body(3, 3)
     integer :: d
-    r = rotation_matrix(body%orientation)
+    lab_axes_in_body = transpose(rotation_matrix(body%orientation))   ! column d: R^T e_d
     do d = 1, 3
-      extent(d) = support_value(body%shape, r(d, :))   ! R^T e_d: lab axis d in body coordinates
+      extent(d) = support_value(body%shape, lab_axes_in_body(:, d))
     end do
   end function lab_half_extent
 

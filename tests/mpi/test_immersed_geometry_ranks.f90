@@ -82,6 +82,8 @@ program test_immersed_geometry_ranks
   call check_equal(nint(global_sum(real(errors%status_mismatches, wp))), 0, 'status_equals_reference_on_every_rank')
   call check_equal(nint(global_sum(real(errors%list_mismatches, wp))), 0, 'lists_and_stencil_links_consistent')
   call check_equal(count_mismatches, 0, 'global_counts_equal_whole_box_reference')
+  call check_equal(nint(global_sum(real(errors%neighbour_violations, wp))), 0, &
+                   'ghosts_touch_fluid_interior_and_fluid_never_meet')
   call check_below(global_max(errors%ghost_distance), 1.0e-12_wp, 'G_equals_B_minus_dG_n')
   call check_below(global_max(errors%image_distance), 1.0e-12_wp, 'M_at_dM_from_surface')
   call check_below(global_max(errors%mirror), 1.0e-12_wp, 'M_equals_2B_minus_G_for_mirror')

@@ -19,6 +19,8 @@ module immersed_reference
   type :: record_errors_t
     integer :: status_mismatches = 0       !< nodes (status arrays incl. halo ring, and stencil flags)
     integer :: list_mismatches = 0         !< ghost/interior lists vs status, stencil_ghost/self links
+    !> ghost without a fluid 6-neighbour, interior with one, fluid with an interior 6-neighbour
+    integer :: neighbour_violations = 0
     real(wp) :: ghost_distance = 0.0_wp    !< | |G - B| - d_G |, |G - (B - d_G n)|
     real(wp) :: image_distance = 0.0_wp    !< |signed distance of M from its body - d_M|, |M - (B + d_M n)|
     real(wp) :: mirror = 0.0_wp            !< |M - (2B - G)| for pure-mirror records without fallback
@@ -93,6 +95,7 @@ contains
     integer :: c, i, j, k, g, corner, n, bits(3), node(3)
     real(wp) :: h(3), box(3), gradient(3), centre(3), interpolated, x(3)
     type(ghost_node_t) :: r
+    integer(int8) :: neighbours(6)
     type(surface_projection_t) :: p
 
     h = [grid%dx, grid%dy, grid%dz]
@@ -105,6 +108,23 @@ contains
             do i = 0, grid%nx + 1
               if (nodes%status(i, j, k) /= reference_status(grid, bodies, c, i, j, grid%z_offset + k)) &
                 errors%status_mismatches = errors%status_mismatches + 1
+            end do
+          end do
+        end do
+        ! The 6-neighbour invariants, on this rank's nodes (the halo ring holds their neighbours).
+        do k = 1, grid%nz_local
+          do j = 1, grid%ny
+            do i = 1, grid%nx
+              neighbours = [nodes%status(i - 1, j, k), nodes%status(i + 1, j, k), nodes%status(i, j - 1, k), &
+                            nodes%status(i, j + 1, k), nodes%status(i, j, k - 1), nodes%status(i, j, k + 1)]
+              select case (nodes%status(i, j, k))
+              case (node_ghost)
+                if (.not. any(neighbours == node_fluid)) errors%neighbour_violations = errors%neighbour_violations + 1
+              case (node_interior)
+                if (any(neighbours == node_fluid)) errors%neighbour_violations = errors%neighbour_violations + 1
+              case (node_fluid)
+                if (any(neighbours == node_interior)) errors%neighbour_violations = errors%neighbour_violations + 1
+              end select
             end do
           end do
         end do

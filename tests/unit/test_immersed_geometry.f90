@@ -222,6 +222,7 @@ contains
     logical, intent(in) :: mirror
     call check_equal(e%status_mismatches, 0, label//'_status_equals_brute_force_reference')
     call check_equal(e%list_mismatches, 0, label//'_lists_and_stencil_links_consistent')
+    call check_equal(e%neighbour_violations, 0, label//'_ghosts_touch_fluid_interior_and_fluid_never_meet')
     call check_below(e%ghost_distance, 1.0e-12_wp, label//'_G_equals_B_minus_dG_n')
     call check_below(e%image_distance, 1.0e-12_wp, label//'_M_outside_at_dM_from_surface')
     if (mirror) call check_below(e%mirror, 1.0e-12_wp, label//'_M_equals_2B_minus_G')
