@@ -1,0 +1,504 @@
+!> Immersed-boundary geometry: classification of the staggered (MAC) velocity nodes of each component
+!> into fluid, ghost and interior nodes for N spheroids in the periodic box, and for every ghost node
+!> its closest surface point, normal, image point and the trilinear interpolation stencil of the
+!> image point on the component's own grid (docs/theory.md, "Immersed boundary geometry").
+!>
+!> - A node is solid when it lies strictly inside a body (implicit function < 0, at the periodic
+!>   minimum image of node - centre). It belongs to the body whose surface is nearest among those
+!>   that contain it (only overlapping bodies contain a node twice).
+!> - Ghost: a solid node with at least one fluid node among its 6 neighbours on the same
+!>   component's grid. Interior: every other solid node. Fluid: not solid.
+!> - Ghost node G, closest surface point B, outward normal n, d_G = |G - B|: image point
+!>   M = B + d_M n, with d_M = d_G (the pure mirror, M = 2B - G: the exterior point of the paper's
+!>   Eq. 7, u_G = 2 u_IB - u_E, after Mark & van Wachem 2008) or d_M = max(d_G, image_distance_cells
+!>   h_max) (the image point of the explicit coupling).
+!>   The ghost condition is u_G = u_B - kappa (u_M - u_B), kappa = d_G/d_M.
+!> - If the segment from B to M enters another body (a gap below about two cells), M is moved back
+!>   along n to the middle of the gap, d_M = s/2 with s the distance from B to the other body
+!>   along n, and kappa = d_G/d_M (linear extrapolation); such nodes are flagged and counted. If B
+!>   itself lies inside another body (overlapping bodies), M = B and kappa = 0: the ghost takes the
+!>   surface velocity.
+!> - u_M = sum_c w_c u_c over the 8 nodes of the component's grid cell that contains M (trilinear);
+!>   they may include ghost nodes, interior nodes and G itself, whose weight the implicit ghost
+!>   row moves to the diagonal: (1 + kappa w_G) u_G = (1 + kappa) u_B - kappa sum_{c /= G} w_c u_c.
+!>
+!> The classification is local: each rank classifies its own z planes and as many planes beyond
+!> them as the stencils reach (the geometry is analytic, so no communication is needed). Stencil
+!> nodes are stored by global index, wrapped periodically; the ones outside this rank's planes
+!> need values from the neighbouring ranks (`halo_planes_needed`).
+module immersed_geometry
+  use, intrinsic :: iso_fortran_env, only: int8
+  use agglo_kinds, only: wp
+  use error_handling, only: fatal
+  use fluid_grid, only: fluid_grid_t, x_centre, y_centre, z_centre, x_face, y_face, z_face
+  use quaternion, only: rotate_to_body, rotation_matrix
+  use spheroid, only: spheroid_t, implicit_function, support_value
+  use spheroid_distance, only: surface_projection_t, lab_closest_point, body_closest_point
+  implicit none
+  private
+  public :: immersed_body_t, immersed_options_t, ghost_node_t, component_nodes_t, immersed_geometry_t
+  public :: classify_nodes, minimum_image, node_position, thin_dimension_cells
+  public :: node_fluid, node_ghost, node_interior
+
+  integer(int8), parameter :: node_fluid = 0_int8, node_ghost = 1_int8, node_interior = 2_int8
+
+  !> One rigid body as the geometry sees it.
+  type :: immersed_body_t
+    type(spheroid_t) :: shape                  !< semi-axes (spheroid.f90)
+    real(wp) :: centre(3) = 0.0_wp             !< m, lab frame (any periodic image)
+    real(wp) :: orientation(4) = [1.0_wp, 0.0_wp, 0.0_wp, 0.0_wp]   !< unit quaternion, body -> lab
+  end type immersed_body_t
+
+  !> How the image point is placed.
+  type :: immersed_options_t
+    character(len=16) :: image_point = 'mirror'  !< 'mirror': d_M = d_G; 'image': d_M = max(d_G, image_distance_cells h_max)
+    real(wp) :: image_distance_cells = 1.5_wp    !< cells (of the largest spacing), for 'image'
+  end type immersed_options_t
+
+  !> A ghost node of one velocity component, with everything its ghost row needs.
+  type :: ghost_node_t
+    integer :: node(3) = 0                 !< i, j global; k local to this rank's slab (1..nz_local)
+    integer :: body = 0                    !< index of the body it belongs to
+    real(wp) :: position(3) = 0.0_wp       !< m, G
+    real(wp) :: surface_point(3) = 0.0_wp  !< m, B, in the periodic image frame of G
+    real(wp) :: normal(3) = 0.0_wp         !< outward unit normal at B
+    real(wp) :: distance = 0.0_wp          !< m, d_G = |G - B|
+    real(wp) :: image_point(3) = 0.0_wp    !< m, M = B + d_M n, in the periodic image frame of G
+    real(wp) :: image_distance = 0.0_wp    !< m, d_M = |M - B|
+    real(wp) :: extrapolation = 0.0_wp     !< kappa = d_G/d_M (1 for the pure mirror; 0 when M = B)
+    logical :: fallback = .false.          !< M moved back because the image segment entered another body
+    integer :: lower_offset(3) = 0         !< index of the stencil's lower corner minus the index of G
+    integer :: stencil(3, 8) = 0           !< global i, j, k of the 8 nodes, wrapped into 1..n
+    real(wp) :: weight(8) = 0.0_wp         !< trilinear weights (sum 1)
+    integer(int8) :: stencil_status(8) = node_fluid   !< node_fluid, node_ghost or node_interior
+    logical :: stencil_local(8) = .false.  !< the node is in this rank's planes
+    integer :: stencil_ghost(8) = 0        !< its index in this component's ghost list (local ghosts), else 0
+    integer :: self_corner = 0             !< the corner that is G itself (its weight w_G), 0 if none
+  end type ghost_node_t
+
+  !> Classification of one velocity component's nodes on this rank.
+  type :: component_nodes_t
+    integer :: component = 0                       !< 1 = u (x faces), 2 = v (y faces), 3 = w (z faces)
+    !> node_fluid/ghost/interior over the field layout (0:nx+1, 0:ny+1, 0:nz_local+1), halos included
+    integer(int8), allocatable :: status(:, :, :)
+    integer :: n_ghost = 0, n_interior = 0
+    type(ghost_node_t), allocatable :: ghost(:)     !< (n_ghost)
+    integer, allocatable :: interior(:, :)          !< (3, n_interior): i, j global, k local
+    integer, allocatable :: interior_body(:)        !< (n_interior)
+    integer :: n_fallback = 0                      !< ghosts whose image point was moved back (another body)
+    integer :: n_overlap = 0                       !< ghosts whose surface point lies inside another body
+    integer :: halo_planes_needed = 0              !< planes beyond this rank's slab that the stencils reach
+  end type component_nodes_t
+
+  !> The immersed-boundary geometry of all bodies on this rank.
+  type :: immersed_geometry_t
+    integer :: n_bodies = 0
+    type(component_nodes_t) :: component(3)
+  end type immersed_geometry_t
+
+contains
+
+  !> Periodic minimum image of a separation d in a box of edge length box: d - box nint(d/box),
+  !> in [-box/2, box/2]. (To be shared with the particle system's periodic geometry.)
+  elemental function minimum_image(d, box) result(image)
+    real(wp), intent(in) :: d, box
+    real(wp) :: image
+    image = d - box * anint(d / box)
+  end function minimum_image
+
+  !> Position (m) of node (i, j, k) of velocity component `component` (1 u, 2 v, 3 w), i and j
+  !> global, k local to this rank (any integers: the positions continue beyond the box).
+  pure function node_position(grid, component, i, j, k) result(x)
+    type(fluid_grid_t), intent(in) :: grid
+    integer, intent(in) :: component, i, j, k
+    real(wp) :: x(3)
+    x = [x_centre(grid, i), y_centre(grid, j), z_centre(grid, k)]
+    select case (component)
+    case (1)
+      x(1) = x_face(grid, i)
+    case (2)
+      x(2) = y_face(grid, j)
+    case (3)
+      x(3) = z_face(grid, k)
+    end select
+  end function node_position
+
+  !> Thinnest dimension of a body (2 min(a, b)) in cells of the largest grid spacing: the ghost
+  !> layers of two opposite faces overlap when it is small (the disk of r = 50 um, aspect 5, is 2.2
+  !> cells thick at 64^3 in a 1 mm box).
+  pure function thin_dimension_cells(shape, grid) result(cells)
+    type(spheroid_t), intent(in) :: shape
+    type(fluid_grid_t), intent(in) :: grid
+    real(wp) :: cells
+    cells = 2.0_wp * min(shape%a, shape%b) / max(grid%dx, grid%dy, grid%dz)
+  end function thin_dimension_cells
+
+  !> Classify the nodes of u, v and w on this rank for the bodies and build the ghost records.
+  subroutine classify_nodes(grid, bodies, options, geometry)
+    type(fluid_grid_t), intent(in) :: grid
+    type(immersed_body_t), intent(in) :: bodies(:)
+    type(immersed_options_t), intent(in) :: options
+    type(immersed_geometry_t), intent(inout) :: geometry
+    integer :: component
+    call check_inputs(grid, bodies, options)
+    geometry%n_bodies = size(bodies)
+    do component = 1, 3
+      call classify_component(grid, bodies, options, component, geometry%component(component))
+    end do
+  end subroutine classify_nodes
+
+  subroutine check_inputs(grid, bodies, options)
+    type(fluid_grid_t), intent(in) :: grid
+    type(immersed_body_t), intent(in) :: bodies(:)
+    type(immersed_options_t), intent(in) :: options
+    real(wp) :: box(3), extent(3)
+    integer :: n, d
+    character(len=200) :: text
+    select case (trim(options%image_point))
+    case ('mirror', 'image')
+    case default
+      call fatal('immersed geometry: image_point = '''//trim(options%image_point)//'''; allowed: mirror, image')
+    end select
+    if (.not. (options%image_distance_cells >= 1.0_wp .and. options%image_distance_cells <= 4.0_wp)) then
+      write(text, '(a,es12.5,a)') 'immersed geometry: image_distance_cells = ', options%image_distance_cells, &
+          '; allowed: 1 to 4 cells'
+      call fatal(trim(text))
+    end if
+    box = [grid%lx, grid%ly, grid%lz]
+    do n = 1, size(bodies)
+      extent = lab_half_extent(bodies(n))
+      do d = 1, 3
+        ! The minimum image sees one copy of a body only if it spans less than half the box.
+        if (.not. (extent(d) < 0.5_wp * box(d) - max(grid%dx, grid%dy, grid%dz))) then
+          write(text, '(a,i0,a,es12.5,a,i0,a,es12.5,a)') 'immersed geometry: body ', n, ' extends ', extent(d), &
+              ' m from its centre along axis ', d, '; it must be less than half the box less one cell (', &
+              0.5_wp * box(d) - max(grid%dx, grid%dy, grid%dz), ' m)'
+          call fatal(trim(text))
+        end if
+      end do
+    end do
+  end subroutine check_inputs
+
+  !> Half-extents (m) of a body along the lab axes: the support function along each axis.
+  pure function lab_half_extent(body) result(extent)
+    type(immersed_body_t), intent(in) :: body
+    real(wp) :: extent(3), lab_axes_in_body(3, 3)
+    integer :: d
+    lab_axes_in_body = transpose(rotation_matrix(body%orientation))   ! column d: R^T e_d
+    do d = 1, 3
+      extent(d) = support_value(body%shape, lab_axes_in_body(:, d))
+    end do
+  end function lab_half_extent
+
+  subroutine classify_component(grid, bodies, options, component, nodes)
+    type(fluid_grid_t), intent(in) :: grid
+    type(immersed_body_t), intent(in) :: bodies(:)
+    type(immersed_options_t), intent(in) :: options
+    integer, intent(in) :: component
+    type(component_nodes_t), intent(inout) :: nodes
+    integer, allocatable :: owner(:, :, :), ghost_nodes(:, :)
+    integer(int8), allocatable :: status(:, :, :)
+    logical, allocatable :: near_x(:), near_y(:), near_z(:)
+    integer :: reach, k_lo, k_hi, i, j, k, n_ghost, n_interior, g
+    real(wp) :: h_max, h_min, image_cells
+
+    ! Planes beyond the slab that the stencils can reach: d_G <= h_max (a fluid neighbour lies one
+    ! spacing away), so |M - G| <= (1 + max(1, image_cells)) h_max, plus the stencil's upper corner.
+    h_max = max(grid%dx, grid%dy, grid%dz)
+    h_min = min(grid%dx, grid%dy, grid%dz)
+    image_cells = 1.0_wp
+    if (trim(options%image_point) == 'image') image_cells = max(1.0_wp, options%image_distance_cells)
+    reach = ceiling((1.0_wp + image_cells) * h_max / h_min) + 1
+    k_lo = 1 - reach
+    k_hi = grid%nz_local + reach
+
+    ! Solid owner on the planes the ghost test of every stencil node needs (one more each side);
+    ! near_* mark the indices within some body's bounding box: only there can a node be solid.
+    allocate(owner(grid%nx, grid%ny, k_lo - 1:k_hi + 1))
+    allocate(near_x(grid%nx), near_y(grid%ny), near_z(k_lo - 1:k_hi + 1))
+    call mark_solid_nodes(grid, bodies, component, k_lo - 1, owner, near_x, near_y, near_z)
+
+    allocate(status(grid%nx, grid%ny, k_lo:k_hi))
+    status = node_fluid
+    do k = k_lo, k_hi
+      if (.not. near_z(k)) cycle
+      do j = 1, grid%ny
+        if (.not. near_y(j)) cycle
+        do i = 1, grid%nx
+          if (owner(i, j, k) == 0) cycle
+          if (owner(wrap(i - 1, grid%nx), j, k) == 0 .or. owner(wrap(i + 1, grid%nx), j, k) == 0 .or. &
+              owner(i, wrap(j - 1, grid%ny), k) == 0 .or. owner(i, wrap(j + 1, grid%ny), k) == 0 .or. &
+              owner(i, j, k - 1) == 0 .or. owner(i, j, k + 1) == 0) then
+            status(i, j, k) = node_ghost
+          else
+            status(i, j, k) = node_interior
+          end if
+        end do
+      end do
+    end do
+
+    ! Field-layout copy (halo ring included) for the callers' loops.
+    nodes%component = component
+    if (allocated(nodes%status)) deallocate(nodes%status)
+    allocate(nodes%status(0:grid%nx + 1, 0:grid%ny + 1, 0:grid%nz_local + 1))
+    nodes%status(1:grid%nx, 1:grid%ny, :) = status(:, :, 0:grid%nz_local + 1)
+    nodes%status(0, 1:grid%ny, :) = nodes%status(grid%nx, 1:grid%ny, :)
+    nodes%status(grid%nx + 1, 1:grid%ny, :) = nodes%status(1, 1:grid%ny, :)
+    nodes%status(:, 0, :) = nodes%status(:, grid%ny, :)
+    nodes%status(:, grid%ny + 1, :) = nodes%status(:, 1, :)
+
+    ! Lists of this rank's ghost and interior nodes, in storage order (k, then j, then i), which
+    ! find_ghost relies on.
+    n_ghost = 0
+    n_interior = 0
+    do k = 1, grid%nz_local
+      if (.not. near_z(k)) cycle
+      n_ghost = n_ghost + count(status(:, :, k) == node_ghost)
+      n_interior = n_interior + count(status(:, :, k) == node_interior)
+    end do
+    if (allocated(nodes%ghost)) deallocate(nodes%ghost)
+    if (allocated(nodes%interior)) deallocate(nodes%interior)
+    if (allocated(nodes%interior_body)) deallocate(nodes%interior_body)
+    allocate(nodes%ghost(n_ghost), nodes%interior(3, n_interior), nodes%interior_body(n_interior))
+    nodes%n_ghost = 0
+    nodes%n_interior = 0
+    do k = 1, grid%nz_local
+      if (.not. near_z(k)) cycle
+      do j = 1, grid%ny
+        if (.not. near_y(j)) cycle
+        do i = 1, grid%nx
+          select case (status(i, j, k))
+          case (node_ghost)
+            nodes%n_ghost = nodes%n_ghost + 1
+            nodes%ghost(nodes%n_ghost)%node = [i, j, k]
+            nodes%ghost(nodes%n_ghost)%body = owner(i, j, k)
+          case (node_interior)
+            nodes%n_interior = nodes%n_interior + 1
+            nodes%interior(:, nodes%n_interior) = [i, j, k]
+            nodes%interior_body(nodes%n_interior) = owner(i, j, k)
+          end select
+        end do
+      end do
+    end do
+
+    nodes%n_fallback = 0
+    nodes%n_overlap = 0
+    nodes%halo_planes_needed = 0
+    allocate(ghost_nodes(3, nodes%n_ghost))
+    do g = 1, nodes%n_ghost
+      ghost_nodes(:, g) = nodes%ghost(g)%node
+    end do
+    do g = 1, nodes%n_ghost
+      call build_ghost_record(grid, bodies, options, component, status, k_lo, ghost_nodes, nodes%ghost(g))
+      if (nodes%ghost(g)%fallback) nodes%n_fallback = nodes%n_fallback + 1
+      if (nodes%ghost(g)%fallback .and. nodes%ghost(g)%image_distance <= 0.0_wp) nodes%n_overlap = nodes%n_overlap + 1
+      k = nodes%ghost(g)%node(3) + nodes%ghost(g)%lower_offset(3)
+      nodes%halo_planes_needed = max(nodes%halo_planes_needed, 1 - k, k + 1 - grid%nz_local)
+    end do
+  end subroutine classify_component
+
+  !> Index in the ghost list (ghost_nodes(:, g) = i, j, k of ghost g) of node (i, j, k) (k local), 0 if
+  !> it is not in the list: binary search, the list being in storage order.
+  pure integer function find_ghost(ghost_nodes, nx, ny, i, j, k)
+    integer, intent(in) :: ghost_nodes(:, :)
+    integer, intent(in) :: nx, ny, i, j, k
+    integer :: lo, hi, mid, key, mid_key
+    key = storage_key(i, j, k)
+    lo = 1
+    hi = size(ghost_nodes, 2)
+    find_ghost = 0
+    do while (lo <= hi)
+      mid = (lo + hi) / 2
+      mid_key = storage_key(ghost_nodes(1, mid), ghost_nodes(2, mid), ghost_nodes(3, mid))
+      if (mid_key == key) then
+        find_ghost = mid
+        return
+      else if (mid_key < key) then
+        lo = mid + 1
+      else
+        hi = mid - 1
+      end if
+    end do
+  contains
+    pure integer function storage_key(i, j, k)
+      integer, intent(in) :: i, j, k
+      storage_key = ((k - 1) * ny + (j - 1)) * nx + i
+    end function storage_key
+  end function find_ghost
+
+  !> owner(i, j, k) = index of the body that contains node (i, j, k) (k local, extended), else 0.
+  !> Only the nodes within each body's lab bounding box are tested.
+  subroutine mark_solid_nodes(grid, bodies, component, k_first, owner, near_x, near_y, near_z)
+    type(fluid_grid_t), intent(in) :: grid
+    type(immersed_body_t), intent(in) :: bodies(:)
+    integer, intent(in) :: component, k_first
+    integer, intent(inout) :: owner(:, :, k_first:)
+    logical, intent(out) :: near_x(:), near_y(:), near_z(k_first:)
+    integer :: n, i, j, k, previous
+    real(wp) :: box(3), extent(3), x(3), d(3), d_previous, d_new, rotation(3, 3)
+    logical, allocatable :: in_x(:), in_y(:)
+    real(wp), allocatable :: sep_x(:), sep_y(:)
+    type(surface_projection_t) :: p_new, p_old
+
+    box = [grid%lx, grid%ly, grid%lz]
+    owner = 0
+    near_x = .false.
+    near_y = .false.
+    near_z = .false.
+    allocate(in_x(grid%nx), in_y(grid%ny), sep_x(grid%nx), sep_y(grid%ny))
+    do n = 1, size(bodies)
+      extent = lab_half_extent(bodies(n))
+      rotation = rotation_matrix(bodies(n)%orientation)
+      do i = 1, grid%nx
+        x = node_position(grid, component, i, 1, 1)
+        sep_x(i) = minimum_image(x(1) - bodies(n)%centre(1), box(1))
+        in_x(i) = abs(sep_x(i)) <= extent(1)
+        near_x(i) = near_x(i) .or. in_x(i)
+      end do
+      do j = 1, grid%ny
+        x = node_position(grid, component, 1, j, 1)
+        sep_y(j) = minimum_image(x(2) - bodies(n)%centre(2), box(2))
+        in_y(j) = abs(sep_y(j)) <= extent(2)
+        near_y(j) = near_y(j) .or. in_y(j)
+      end do
+      do k = k_first, ubound(owner, 3)
+        x = node_position(grid, component, 1, 1, k)
+        d(3) = minimum_image(x(3) - bodies(n)%centre(3), box(3))
+        if (abs(d(3)) > extent(3)) cycle
+        near_z(k) = .true.
+        do j = 1, grid%ny
+          if (.not. in_y(j)) cycle
+          d(2) = sep_y(j)
+          do i = 1, grid%nx
+            if (.not. in_x(i)) cycle
+            d(1) = sep_x(i)
+            ! Inside test on the body-frame point R^T d.
+            if (.not. (implicit_function(bodies(n)%shape, matmul(d, rotation)) < 0.0_wp)) cycle
+            previous = owner(i, j, k)
+            if (previous == 0) then
+              owner(i, j, k) = n
+            else
+              ! Inside two (overlapping) bodies: the one whose surface is nearer.
+              p_new = body_closest_point(bodies(n)%shape, rotate_to_body(bodies(n)%orientation, d))
+              x = node_position(grid, component, i, j, k)
+              p_old = body_closest_point(bodies(previous)%shape, rotate_to_body(bodies(previous)%orientation, &
+                                         minimum_image(x - bodies(previous)%centre, box)))
+              d_new = abs(p_new%signed_distance)
+              d_previous = abs(p_old%signed_distance)
+              if (d_new < d_previous) owner(i, j, k) = n
+            end if
+          end do
+        end do
+      end do
+    end do
+  end subroutine mark_solid_nodes
+
+  !> Closest point, normal, image point (with the other-body fallback) and trilinear stencil of
+  !> one ghost node. status covers (1:nx, 1:ny, k_lo:) in extended local k.
+  subroutine build_ghost_record(grid, bodies, options, component, status, k_lo, ghost_nodes, ghost)
+    type(fluid_grid_t), intent(in) :: grid
+    type(immersed_body_t), intent(in) :: bodies(:)
+    type(immersed_options_t), intent(in) :: options
+    integer, intent(in) :: component, k_lo
+    integer(int8), intent(in) :: status(:, :, k_lo:)
+    integer, intent(in) :: ghost_nodes(:, :)     !< i, j, k of this rank's ghosts (for the stencil's ghost links)
+    type(ghost_node_t), intent(inout) :: ghost
+    type(surface_projection_t) :: projection
+    real(wp) :: box(3), spacing(3), centre(3), nearest_entry, fraction(3), t(3), w(0:1, 3)
+    integer :: n, corner, bits(3), node(3), d
+    type(immersed_body_t) :: body
+
+    box = [grid%lx, grid%ly, grid%lz]
+    spacing = [grid%dx, grid%dy, grid%dz]
+    body = bodies(ghost%body)
+    ghost%position = node_position(grid, component, ghost%node(1), ghost%node(2), ghost%node(3))
+    ! The image of the body's centre nearest to G: everything below is in G's image frame.
+    centre = ghost%position - minimum_image(ghost%position - body%centre, box)
+    projection = lab_closest_point(body%shape, centre, body%orientation, ghost%position)
+    ghost%surface_point = projection%point
+    ghost%normal = projection%normal
+    ! |d|: G is inside by the implicit function; the computed distance can only be off by round-off.
+    ghost%distance = abs(projection%signed_distance)
+    if (trim(options%image_point) == 'image') then
+      ghost%image_distance = max(ghost%distance, options%image_distance_cells * maxval(spacing))
+    else
+      ghost%image_distance = ghost%distance
+    end if
+
+    ! Fallback: the segment B -> B + d_M n must not enter another body; if it does, M goes to the
+    ! middle of the gap to the nearest body along n.
+    nearest_entry = huge(1.0_wp)
+    do n = 1, size(bodies)
+      if (n == ghost%body) cycle
+      nearest_entry = min(nearest_entry, &
+                          segment_entry(bodies(n), box, ghost%surface_point, ghost%normal, ghost%image_distance))
+    end do
+    ghost%fallback = nearest_entry < ghost%image_distance
+    if (ghost%fallback) ghost%image_distance = 0.5_wp * nearest_entry
+    ghost%image_point = ghost%surface_point + ghost%image_distance * ghost%normal
+    if (ghost%image_distance > 0.0_wp) then
+      ghost%extrapolation = ghost%distance / ghost%image_distance
+    else
+      ghost%extrapolation = 0.0_wp
+    end if
+
+    ! Trilinear stencil of M, located relative to G in index space (no wrap of positions needed).
+    fraction = real(ghost%node, wp) + (ghost%image_point - ghost%position) / spacing
+    ghost%lower_offset = floor(fraction) - ghost%node
+    t = fraction - floor(fraction)
+    do d = 1, 3
+      w(0, d) = 1.0_wp - t(d)
+      w(1, d) = t(d)
+    end do
+    ghost%self_corner = 0
+    do corner = 1, 8
+      bits = [mod(corner - 1, 2), mod((corner - 1) / 2, 2), (corner - 1) / 4]
+      node = ghost%node + ghost%lower_offset + bits     ! i, j unwrapped; k local, extended
+      ghost%weight(corner) = w(bits(1), 1) * w(bits(2), 2) * w(bits(3), 3)
+      ghost%stencil(:, corner) = [wrap(node(1), grid%nx), wrap(node(2), grid%ny), &
+                                  wrap(grid%z_offset + node(3), grid%nz)]
+      ghost%stencil_status(corner) = status(ghost%stencil(1, corner), ghost%stencil(2, corner), node(3))
+      ghost%stencil_local(corner) = node(3) >= 1 .and. node(3) <= grid%nz_local
+      ghost%stencil_ghost(corner) = 0
+      if (ghost%stencil_local(corner) .and. ghost%stencil_status(corner) == node_ghost) &
+        ghost%stencil_ghost(corner) = find_ghost(ghost_nodes, grid%nx, grid%ny, ghost%stencil(1, corner), &
+                                                 ghost%stencil(2, corner), node(3))
+      if (all(bits + ghost%lower_offset == 0)) ghost%self_corner = corner
+    end do
+  end subroutine build_ghost_record
+
+  !> Distance s in [0, length] along the ray b + s n at which it first enters `body` (the periodic
+  !> image nearest b), or huge if it does not within length. 0 if b is inside the body.
+  function segment_entry(body, box, b, n, length) result(entry)
+    type(immersed_body_t), intent(in) :: body
+    real(wp), intent(in) :: box(3), b(3), n(3), length
+    real(wp) :: entry, y0(3), m(3), inverse_squares(3), qa, qb, qc, discriminant, root
+    entry = huge(1.0_wp)
+    ! Quick rejection: the segment cannot reach the body's bounding sphere.
+    y0 = minimum_image(b - body%centre, box)
+    if (norm2(y0) > max(body%shape%a, body%shape%b) + length) return
+    y0 = rotate_to_body(body%orientation, y0)
+    m = rotate_to_body(body%orientation, n)
+    inverse_squares = [1.0_wp / body%shape%a**2, 1.0_wp / body%shape%b**2, 1.0_wp / body%shape%b**2]
+    ! F(y0 + s m) = qa s^2 + 2 qb s + qc (implicit function along the ray).
+    qa = sum(inverse_squares * m**2)
+    qb = sum(inverse_squares * y0 * m)
+    qc = sum(inverse_squares * y0**2) - 1.0_wp
+    if (qc < 0.0_wp) then
+      entry = 0.0_wp
+      return
+    end if
+    discriminant = qb**2 - qa * qc
+    if (discriminant < 0.0_wp .or. qb >= 0.0_wp) return    ! misses, or moves away (qc >= 0)
+    ! Smaller root of qa s^2 + 2 qb s + qc with qb < 0, in the cancellation-free form.
+    root = qc / (-qb + sqrt(discriminant))
+    if (root <= length) entry = root
+  end function segment_entry
+
+  !> Periodic index in 1..n.
+  elemental integer function wrap(i, n)
+    integer, intent(in) :: i, n
+    wrap = modulo(i - 1, n) + 1
+  end function wrap
+
+end module immersed_geometry
