@@ -8,8 +8,9 @@
 !>    Fortran = (N, m) in h5py) and commit it with sample_end(out, ...); the same for the events table
 !>    with event_value / event_end (columns under /events). The first row fixes the columns of a table;
 !>    every later row must set exactly those (anything else is a programming error and stops the run).
-!>  - the pair scenes' layout of docs/outputs.md: append_pair_sample(out, time, particles, pair) and
-!>    append_collision_event(out, event), with the record types below.
+!>  - the particle layout of docs/outputs.md: append_particles_sample(out, time, particles, pairs) for
+!>    N bodies and their pairs (append_pair_sample for one pair) and append_collision_event(out, event),
+!>    with the record types below.
 !> Rows are buffered in memory (buffer_rows of them) and appended to extendible, chunked datasets
 !> when the buffer is full, on particle_output_flush and on particle_output_close.
 !> particles.h5 is complete once closed; summary.json, written last via a temporary name, marks a
@@ -25,7 +26,8 @@ module particle_output
   private
   public :: particle_output_t, pair_run_metadata_t, particle_record_t, pair_record_t, collision_event_t, &
             run_summary_t, particle_output_open, particle_output_close, particle_output_flush, &
-            sample_value, sample_end, event_value, event_end, append_pair_sample, append_collision_event, &
+            sample_value, sample_end, event_value, event_end, append_pair_sample, append_particles_sample, &
+            append_collision_event, &
             write_summary_json, collision_event_columns
 
   integer, parameter :: buffer_rows = 256
@@ -54,8 +56,9 @@ module particle_output
     real(wp) :: torque_collision(3) = 0.0_wp
   end type particle_record_t
 
-  !> Quantities of the pair at one output time.
+  !> Quantities of one pair (bodies first < second) at one output time.
   type :: pair_record_t
+    integer :: first = 1, second = 2        !< the pair's bodies (numbered from 1)
     real(wp) :: gap = 0.0_wp                !< m, signed surface gap (negative = overlap)
     real(wp) :: closest_point1(3) = 0.0_wp  !< m, lab frame
     real(wp) :: closest_point2(3) = 0.0_wp
@@ -82,6 +85,8 @@ module particle_output
     real(wp) :: aspect_ratio = 1.0_wp
     character(len=16) :: fluid = ''
     character(len=16) :: outcome = ''                 !< 'agglomerated' | 'rebounded' | 'no_contact'
+    logical :: outcome_settled = .false.              !< false: decided in flight (docs/theory.md, Run outcome)
+    character(len=16) :: end_rule = ''                !< &pair end_rule: 'settled' | 'paper'
     integer :: collisions = 0
     logical :: has_first_collision = .false.          !< false: "first_collision": null
     type(collision_event_t) :: first_collision
@@ -302,18 +307,28 @@ contains
   ! The pair scenes' layout
   ! ---------------------------------------------------------------------------------------------
 
-  !> One row of the pair time series: /time, /particle1/..., /particle2/..., /pair/...
+  !> One row of the time series of a pair: /time, /particle1/..., /particle2/..., /pair/...
   subroutine append_pair_sample(out, time, particles, pair)
     type(particle_output_t), intent(inout) :: out
     real(wp), intent(in) :: time
     type(particle_record_t), intent(in) :: particles(2)
     type(pair_record_t), intent(in) :: pair
-    character(len=10) :: group
-    integer :: n
+    call append_particles_sample(out, time, particles, [pair])
+  end subroutine append_pair_sample
+
+  !> One row of the time series of N bodies: /time, /particle<n>/... for n = 1..N, and per pair
+  !> /pair/... when N = 2 (the pair layout), /pair<i>_<j>/... otherwise.
+  subroutine append_particles_sample(out, time, particles, pairs)
+    type(particle_output_t), intent(inout) :: out
+    real(wp), intent(in) :: time
+    type(particle_record_t), intent(in) :: particles(:)
+    type(pair_record_t), intent(in) :: pairs(:)
+    character(len=32) :: group
+    integer :: n, p
     if (.not. out%active) return
     out%pair_layout = .true.
     call sample_value(out, 'time', time)
-    do n = 1, 2
+    do n = 1, size(particles)
       write(group, '(a,i0,a)') 'particle', n, '/'
       call sample_value(out, trim(group)//'position', particles(n)%position)
       call sample_value(out, trim(group)//'quaternion', particles(n)%quaternion)
@@ -326,14 +341,21 @@ contains
       call sample_value(out, trim(group)//'torque_dlvo', particles(n)%torque_dlvo)
       call sample_value(out, trim(group)//'torque_collision', particles(n)%torque_collision)
     end do
-    call sample_value(out, 'pair/gap', pair%gap)
-    call sample_value(out, 'pair/closest_point1', pair%closest_point1)
-    call sample_value(out, 'pair/closest_point2', pair%closest_point2)
-    call sample_value(out, 'pair/chi_eta', pair%chi_eta)
-    call sample_value(out, 'pair/relative_velocity', pair%relative_velocity)
-    call sample_value(out, 'pair/vdw_force', pair%vdw_force)
+    do p = 1, size(pairs)
+      if (size(particles) == 2) then
+        group = 'pair/'
+      else
+        write(group, '(a,i0,a,i0,a)') 'pair', pairs(p)%first, '_', pairs(p)%second, '/'
+      end if
+      call sample_value(out, trim(group)//'gap', pairs(p)%gap)
+      call sample_value(out, trim(group)//'closest_point1', pairs(p)%closest_point1)
+      call sample_value(out, trim(group)//'closest_point2', pairs(p)%closest_point2)
+      call sample_value(out, trim(group)//'chi_eta', pairs(p)%chi_eta)
+      call sample_value(out, trim(group)//'relative_velocity', pairs(p)%relative_velocity)
+      call sample_value(out, trim(group)//'vdw_force', pairs(p)%vdw_force)
+    end do
     call sample_end(out)
-  end subroutine append_pair_sample
+  end subroutine append_particles_sample
 
   !> One row of the events table (/events/<collision_event_columns>).
   subroutine append_collision_event(out, event)
@@ -377,6 +399,8 @@ contains
     call json_add(object, 'aspect_ratio', summary%aspect_ratio)
     call json_add(object, 'fluid', trim(summary%fluid))
     call json_add(object, 'outcome', trim(summary%outcome))
+    call json_add(object, 'outcome_settled', summary%outcome_settled)
+    call json_add(object, 'end_rule', trim(summary%end_rule))
     call json_add(object, 'collisions', summary%collisions)
     if (summary%has_first_collision) then
       call json_add(first, 'time', summary%first_collision%time)
