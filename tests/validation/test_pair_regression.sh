@@ -99,3 +99,27 @@ print(('PASS ' if d['outcome_settled'] is False else 'FAIL ') + 'stokes_fast_sph
       + f"  outcome_settled {d['outcome_settled']}")
 EOF
 fi
+
+# A run in flight at the paper's end time (needle seed 68: one collision, then 145 nm apart and
+# approaching inside the well at 2 t_c). Values recorded with this code: the paper's rule calls it
+# 'agglomerated' decided in flight; the settled rule runs on to the re-contact (second collision at
+# about 14.7 ms) and calls it 'agglomerated', settled. Both share the trajectory up to 2 t_c.
+run inflight_paper quiescent_needle_none 68 paper && run inflight_settled quiescent_needle_none 68 settled && \
+  "$PY" - "$work" <<'EOF2'
+import glob, json, sys
+def load(name):
+    return json.load(open(glob.glob(sys.argv[1] + '/' + name + '/output/*/summary.json')[0]))
+p, s = load('inflight_paper'), load('inflight_settled')
+checks = [
+    ('inflight_paper_decided_in_flight', p['outcome'] == 'agglomerated' and p['outcome_settled'] is False
+     and p['collisions'] == 1, f"{p['outcome']} settled {p['outcome_settled']} collisions {p['collisions']}"),
+    ('inflight_paper_ends_at_twice_first_collision',
+     abs(p['end_time'] - 2 * p['first_collision']['time']) <= 1e-9 * p['end_time'], f"{p['end_time']!r}"),
+    ('inflight_settled_runs_to_recontact', s['outcome'] == 'agglomerated' and s['outcome_settled'] is True
+     and s['collisions'] >= 2 and s['end_time'] > p['end_time'] and s['final_gap'] <= 5e-9,
+     f"{s['outcome']} settled {s['outcome_settled']} collisions {s['collisions']} end {s['end_time']!r}"),
+    ('inflight_same_first_collision', s['first_collision'] == p['first_collision'], ''),
+]
+for name, ok, detail in checks:
+    print(('PASS ' if ok else 'FAIL ') + name + '  ' + detail)
+EOF2
