@@ -55,7 +55,7 @@ contains
     call log_pair(cfg, pair, rules)
     call particle_output_open(output, run_file('particles.h5'), pair_run_metadata_t(name=cfg%run%name, &
         shape=cfg%pair%shape, aspect_ratio=pair%shape%aspect_ratio, radius=cfg%pair%radius, fluid=cfg%scene%fluid, &
-        seed=int(cfg%run%seed, i8)))
+        seed=int(cfg%run%seed, i8), bodies=system%n))
 
     dt = cfg%run%dt
     end_time = cfg%run%end_time
@@ -141,7 +141,8 @@ contains
             theta2=pair%contact%theta2, phi2=pair%contact%phi2, &
             normal_velocity_before=pair%collision%normal_velocity_before, &
             normal_velocity_after=pair%collision%normal_velocity_after, &
-            psi=symmetry_axis_angle(system%bodies(1)%quaternion, system%bodies(2)%quaternion))
+            psi=symmetry_axis_angle(system%bodies(1)%quaternion, system%bodies(2)%quaternion), &
+            first=pair%first, second=pair%second)
         call append_collision_event(output, event)
         summary%collisions = summary%collisions + 1
         if (summary%collisions == 1) then

@@ -40,6 +40,7 @@ module particle_output
     real(wp) :: radius = 0.0_wp             !< m, volume-equivalent radius
     character(len=16) :: fluid = ''         !< 'none' | 'stokes'
     integer(i8) :: seed = 0_i8              !< &run seed
+    integer :: bodies = 2                   !< number of bodies; > 2 adds /bodies and the events' body columns
   end type pair_run_metadata_t
 
   !> State and loads of one particle at one output time (lab frame unless stated).
@@ -75,6 +76,7 @@ module particle_output
     real(wp) :: normal_velocity_before = 0.0_wp  !< m/s, positive = approaching
     real(wp) :: normal_velocity_after = 0.0_wp
     real(wp) :: psi = 0.0_wp                     !< rad, angle between the symmetry axes, [0, pi/2]
+    integer :: first = 1, second = 2             !< the colliding bodies ("particle 1" is first)
   end type collision_event_t
 
   !> Contents of summary.json (docs/outputs.md).
@@ -99,9 +101,11 @@ module particle_output
     real(wp) :: wall_time = 0.0_wp                    !< s
   end type run_summary_t
 
-  !> Names of the events-table columns written by append_collision_event (under /events).
+  !> Names of the events-table columns written by append_collision_event (under /events); with more
+  !> than two bodies also body_columns (the colliding bodies' numbers, stored as reals).
   character(len=*), parameter :: collision_event_columns(8) = [character(len=22) :: 'time', 'theta1', 'phi1', &
       'theta2', 'phi2', 'normal_velocity_before', 'normal_velocity_after', 'psi']
+  character(len=*), parameter :: body_columns(2) = [character(len=6) :: 'first', 'second']
 
   type :: column_t
     character(len=:), allocatable :: name
@@ -124,6 +128,7 @@ module particle_output
     type(h5_file_t) :: file
     logical :: active = .false.
     logical :: pair_layout = .false.         !< append_pair_sample used: events table always present
+    integer :: bodies = 2                    !< > 2: the events table also has /events/first, /events/second
     type(table_t) :: samples, events
   end type particle_output_t
 
@@ -148,6 +153,7 @@ contains
     out%samples%group = ''
     out%events%group = 'events/'
     allocate(out%samples%columns(0), out%events%columns(0))
+    out%bodies = metadata%bodies
     if (.not. out%active) return
     call h5_create(out%file, path, serial=.true.)
     call h5_write_string(out%file, 'name', trim(metadata%name))
@@ -156,6 +162,7 @@ contains
     call h5_write_array(out%file, 'aspect_ratio', metadata%aspect_ratio)
     call h5_write_array(out%file, 'radius', metadata%radius)
     call h5_write_array(out%file, 'seed', metadata%seed)
+    if (metadata%bodies > 2) call h5_write_array(out%file, 'bodies', int(metadata%bodies, i8))
   end subroutine particle_output_open
 
   !> Write the buffered rows and push them to disk (a crash loses nothing written before).
@@ -178,6 +185,11 @@ contains
       do i = 1, size(collision_event_columns)
         call h5_append(out%file, 'events/'//trim(collision_event_columns(i)), [real(wp) ::])
       end do
+      if (out%bodies > 2) then
+        do i = 1, size(body_columns)
+          call h5_append(out%file, 'events/'//trim(body_columns(i)), [real(wp) ::])
+        end do
+      end if
     end if
     call h5_close(out%file)
     out%active = .false.
@@ -357,7 +369,7 @@ contains
     call sample_end(out)
   end subroutine append_particles_sample
 
-  !> One row of the events table (/events/<collision_event_columns>).
+  !> One row of the events table (/events/<collision_event_columns>, and the bodies with more than two).
   subroutine append_collision_event(out, event)
     type(particle_output_t), intent(inout) :: out
     type(collision_event_t), intent(in) :: event
@@ -371,6 +383,10 @@ contains
     call event_value(out, 'normal_velocity_before', event%normal_velocity_before)
     call event_value(out, 'normal_velocity_after', event%normal_velocity_after)
     call event_value(out, 'psi', event%psi)
+    if (out%bodies > 2) then
+      call event_value(out, 'first', real(event%first, wp))
+      call event_value(out, 'second', real(event%second, wp))
+    end if
     call event_end(out)
   end subroutine append_collision_event
 
