@@ -78,11 +78,7 @@ contains
       if (step > 0 .and. (mod(step, int(cfg%run%progress_interval, i8)) == 0 .or. finished)) &
         call progress_line(step, time, dt, end_time, system, wall_time() - wall_start)
       if (finished) exit
-      if (stokes) then
-        call particle_system_step(system, dt, hydrodynamic)
-      else
-        call particle_system_step(system, dt)
-      end if
+      call particle_system_step(system, dt, hydrodynamic)   ! zero at fluid = 'none'
       time = time + dt
       step = step + 1
     end do
