@@ -15,7 +15,8 @@ module dlvo
   use spheroid, only: spheroid_t, principal_curvatures, principal_directions
   use quaternion, only: rotate_to_lab
   use closest_points, only: closest_points_t
-  use rigid_body, only: rigid_body_t, point_velocity
+  use rigid_body, only: rigid_body_t
+  use collision, only: approach_speed
   implicit none
   private
   public :: dlvo_model_t, dlvo_setup, dlvo_log_constants, dlvo_force, dlvo_vdw_force, dlvo_edl_force, &
@@ -105,7 +106,7 @@ contains
     type(rigid_body_t), intent(in) :: body1, body2
     type(closest_points_t), intent(in) :: contact
     real(wp) :: normal_speed, reduced_mass
-    normal_speed = dot_product(point_velocity(body1, contact%point1) - point_velocity(body2, contact%point2), contact%normal)
+    normal_speed = approach_speed(body1, body2, contact%point1, contact%point2, contact%normal)
     reduced_mass = body1%mass * body2%mass / (body1%mass + body2%mass)
     relative_normal_energy = 0.5_wp * reduced_mass * normal_speed**2
   end function relative_normal_energy
