@@ -3,7 +3,8 @@
 # step routine) replaced the pair scene's private step. Reference values: recorded with the code of
 # the commit before that change (git log of this file), the same decks and seeds, on 1 rank.
 # With end_rule = 'paper' every run below gave the same first-collision time, collision count and
-# final gap as then (bit for bit at the time of recording; checked to 1e-9 relative, counts exactly).
+# final gap as then (bit for bit at the time of recording with the release build; checked: times to
+# 1e-9 relative, collision counts exactly, final gaps to 1e-6, see below).
 # Outcomes: the outcome rules of docs/theory.md ("Run outcome") changed on purpose only for a pair
 # that ends outside the DLVO range yet bound by energy (the Stokes sphere pair at 5 mm/s below: it was
 # 'agglomerated' at a 0.92 um gap, it is 'rebounded' now); every other outcome here is checked
@@ -44,17 +45,20 @@ import glob, json, sys
 name, outcome, collisions, first, gap = sys.argv[1:6]
 path = glob.glob(sys.argv[6] + '/' + name + '/output/*/summary.json')[0]
 d = json.load(open(path))
-def close(actual, expected, what):
-    ok = abs(actual - expected) <= 1e-9 * abs(expected)
-    print(('PASS ' if ok else 'FAIL ') + name + '_' + what + f'  actual {actual!r} expected {expected!r} (rel tol 1e-9)')
+def close(actual, expected, what, tol):
+    ok = abs(actual - expected) <= tol * abs(expected)
+    print(('PASS ' if ok else 'FAIL ') + name + '_' + what + f'  actual {actual!r} expected {expected!r} (rel tol {tol:g})')
 print(('PASS ' if d['outcome'] == outcome else 'FAIL ') + name + f"_outcome  actual {d['outcome']} expected {outcome}")
 print(('PASS ' if d['collisions'] == int(collisions) else 'FAIL ') + name
       + f"_collisions  actual {d['collisions']} expected {collisions}")
 if first == 'None':
     print(('PASS ' if d['first_collision'] is None else 'FAIL ') + name + '_no_first_collision')
 else:
-    close(d['first_collision']['time'], float(first), 'first_collision_time')
-close(d['final_gap'], float(gap), 'final_gap')
+    close(d['first_collision']['time'], float(first), 'first_collision_time', 1e-9)
+# The final gap carries the round-off of the whole run, which depends on the build: without fused
+# multiply-adds (MODE=debug) it moved by up to 4e-8 relative; any change of the physics moves it
+# by far more (one step of the 0.35 mm/s rebound is 7e-11 m, 6e-5 of a 1.2 um gap).
+close(d['final_gap'], float(gap), 'final_gap', 1e-6)
 EOF
 }
 
