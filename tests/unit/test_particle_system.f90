@@ -29,6 +29,7 @@ program test_particle_system
   call eight_random_bodies()
   call pair_across_the_boundary()
   call restart_from_saved_state()
+  call broad_phase()
   call test_finish()
 
 contains
@@ -285,6 +286,32 @@ contains
     call check(straight%collisions_total > 1_i8, 'restart_spans_collisions')
     call check(same, 'restart_bit_for_bit')
   end subroutine restart_from_saved_state
+
+  !> Two spheres 10 um apart: with interaction_gap = 1 um the pair skips the per-pair work (no
+  !> closest points, no DLVO force); without a cut-off (the pair scenes) the vdW tail acts.
+  subroutine broad_phase()
+    type(spheroid_t) :: sphere
+    type(rigid_body_t) :: bodies(2)
+    type(particle_system_t) :: system
+    type(particle_models_t) :: models
+    integer :: i
+    sphere = make_spheroid('sphere', radius, density)
+    do i = 1, 2
+      call rigid_body_of_spheroid(bodies(i), sphere, [real(i - 1, wp) * (2.0_wp * radius + 10.0e-6_wp), 0.0_wp, &
+                                  0.0_wp], [1.0_wp, 0.0_wp, 0.0_wp, 0.0_wp])
+    end do
+    models = models_of(.true., 0.4_wp)
+    models%interaction_gap = 1.0e-6_wp
+    call particle_system_create(system, [sphere, sphere], bodies, models)
+    call particle_system_interact(system, 1.0e-7_wp)
+    call check(.not. system%pairs(1)%active .and. all(system%dlvo_loads%force == 0.0_wp), 'broad_phase_skips_far_pair')
+    models%interaction_gap = huge(1.0_wp)
+    call particle_system_create(system, [sphere, sphere], bodies, models)
+    call particle_system_interact(system, 1.0e-7_wp)
+    call check(system%pairs(1)%active .and. system%dlvo_loads%force(1, 1) > 0.0_wp, 'no_cut_off_vdw_tail_acts', &
+               'attraction pulls body 1 towards body 2 (+x)')
+    call check_close(system%pairs(1)%contact%gap, 10.0e-6_wp, 1.0e-12_wp, 'no_cut_off_gap')
+  end subroutine broad_phase
 
   function total_momentum(system) result(p)
     type(particle_system_t), intent(in) :: system
