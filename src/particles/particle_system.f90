@@ -21,7 +21,10 @@
 !> the impulses before it and its impulse applied at once (one sequential, Gauss-Seidel sweep).
 !> For three spheres in a line, 1 -> 2 -> 3, touching at the same step, the 1-2 impulse comes first
 !> and then the 2-3 test sees the velocity body 2 has just received: the Newton's cradle result.
-!> Every impulse conserves linear and angular momentum exactly and, with e = 1 head-on, energy.
+!> Every impulse conserves linear and angular momentum and, with e = 1 head-on, energy (to round-off).
+!> Pairs whose bounding spheres are farther apart than models%interaction_gap skip steps 2-4.
+!> A per-pair lubrication correction (docs/design.md, data flow) belongs with the DLVO loads of
+!> step 4: it would see the post-impulse velocities, as the Stokes drag of the pair scenes does.
 !>
 !> Periodic box (box_length > 0 in a direction): bodies live on a torus. A pair is handled with
 !> body j moved to its minimum image next to body i (positions, closest points, DLVO lever arms and
