@@ -27,16 +27,17 @@ module config_pair
     real(wp) :: centre_position(3) = [0.5e-3_wp, 0.5e-3_wp, 0.5e-3_wp]  !< m
     real(wp) :: box_length = 1.0e-3_wp            !< m, box for centre = 'random'
     logical :: mirror_first_collision = .true.    !< end at twice the first-collision time (paper)
+    character(len=16) :: end_rule = 'settled'     !< 'settled': past that end until the outcome is settled | 'paper'
     character(len=16) :: integrator = 'euler'     !< rigid-body update: 'euler' (paper) | 'verlet' (2nd order)
   end type pair_config_t
 
-  character(len=16) :: shape, orientation, approach, centre, integrator
+  character(len=16) :: shape, orientation, approach, centre, integrator, end_rule
   real(wp) :: aspect_ratio, radius, density, axis1(3), angle1, axis2(3), angle2, approach_direction(3), &
               gap, relative_speed, centre_position(3), box_length
   logical :: mirror_first_collision
   namelist /pair/ shape, aspect_ratio, radius, density, orientation, axis1, angle1, axis2, angle2, approach, &
                   approach_direction, gap, relative_speed, centre, centre_position, box_length, mirror_first_collision, &
-                  integrator
+                  integrator, end_rule
 
 contains
 
@@ -47,7 +48,7 @@ contains
     angle2 = cfg%angle2; approach = cfg%approach; approach_direction = cfg%approach_direction
     gap = cfg%gap; relative_speed = cfg%relative_speed; centre = cfg%centre
     centre_position = cfg%centre_position; box_length = cfg%box_length
-    mirror_first_collision = cfg%mirror_first_collision; integrator = cfg%integrator
+    mirror_first_collision = cfg%mirror_first_collision; integrator = cfg%integrator; end_rule = cfg%end_rule
   end subroutine to_namelist
 
   subroutine from_namelist(cfg)
@@ -57,7 +58,7 @@ contains
     cfg%angle2 = angle2; cfg%approach = approach; cfg%approach_direction = approach_direction
     cfg%gap = gap; cfg%relative_speed = relative_speed; cfg%centre = centre
     cfg%centre_position = centre_position; cfg%box_length = box_length
-    cfg%mirror_first_collision = mirror_first_collision; cfg%integrator = integrator
+    cfg%mirror_first_collision = mirror_first_collision; cfg%integrator = integrator; cfg%end_rule = end_rule
   end subroutine from_namelist
 
   subroutine read_pair_group(deck, cfg)
@@ -96,6 +97,7 @@ contains
     call require_option('pair', 'centre', cfg%centre, [character(len=8) :: 'given', 'random'])
     call require_positive('pair', 'box_length', cfg%box_length)
     call require_option('pair', 'integrator', cfg%integrator, [character(len=8) :: 'euler', 'verlet'])
+    call require_option('pair', 'end_rule', cfg%end_rule, [character(len=8) :: 'settled', 'paper'])
   end subroutine check_pair_group
 
   subroutine write_pair_group(unit, cfg)

@@ -8,8 +8,9 @@
 !>    Fortran = (N, m) in h5py) and commit it with sample_end(out, ...); the same for the events table
 !>    with event_value / event_end (columns under /events). The first row fixes the columns of a table;
 !>    every later row must set exactly those (anything else is a programming error and stops the run).
-!>  - the pair scenes' layout of docs/outputs.md: append_pair_sample(out, time, particles, pair) and
-!>    append_collision_event(out, event), with the record types below.
+!>  - the particle layout of docs/outputs.md: append_particles_sample(out, time, particles, pairs) for
+!>    N bodies and their pairs (append_pair_sample for one pair) and append_collision_event(out, event),
+!>    with the record types below.
 !> Rows are buffered in memory (buffer_rows of them) and appended to extendible, chunked datasets
 !> when the buffer is full, on particle_output_flush and on particle_output_close.
 !> particles.h5 is complete once closed; summary.json, written last via a temporary name, marks a
@@ -25,7 +26,8 @@ module particle_output
   private
   public :: particle_output_t, pair_run_metadata_t, particle_record_t, pair_record_t, collision_event_t, &
             run_summary_t, particle_output_open, particle_output_close, particle_output_flush, &
-            sample_value, sample_end, event_value, event_end, append_pair_sample, append_collision_event, &
+            sample_value, sample_end, event_value, event_end, append_pair_sample, append_particles_sample, &
+            append_collision_event, &
             write_summary_json, collision_event_columns
 
   integer, parameter :: buffer_rows = 256
@@ -38,6 +40,7 @@ module particle_output
     real(wp) :: radius = 0.0_wp             !< m, volume-equivalent radius
     character(len=16) :: fluid = ''         !< 'none' | 'stokes'
     integer(i8) :: seed = 0_i8              !< &run seed
+    integer :: bodies = 2                   !< number of bodies; > 2 adds /bodies and the events' body columns
   end type pair_run_metadata_t
 
   !> State and loads of one particle at one output time (lab frame unless stated).
@@ -54,8 +57,9 @@ module particle_output
     real(wp) :: torque_collision(3) = 0.0_wp
   end type particle_record_t
 
-  !> Quantities of the pair at one output time.
+  !> Quantities of one pair (bodies first < second) at one output time.
   type :: pair_record_t
+    integer :: first = 1, second = 2        !< the pair's bodies (numbered from 1)
     real(wp) :: gap = 0.0_wp                !< m, signed surface gap (negative = overlap)
     real(wp) :: closest_point1(3) = 0.0_wp  !< m, lab frame
     real(wp) :: closest_point2(3) = 0.0_wp
@@ -72,6 +76,7 @@ module particle_output
     real(wp) :: normal_velocity_before = 0.0_wp  !< m/s, positive = approaching
     real(wp) :: normal_velocity_after = 0.0_wp
     real(wp) :: psi = 0.0_wp                     !< rad, angle between the symmetry axes, [0, pi/2]
+    integer :: first = 1, second = 2             !< the colliding bodies ("particle 1" is first)
   end type collision_event_t
 
   !> Contents of summary.json (docs/outputs.md).
@@ -82,6 +87,8 @@ module particle_output
     real(wp) :: aspect_ratio = 1.0_wp
     character(len=16) :: fluid = ''
     character(len=16) :: outcome = ''                 !< 'agglomerated' | 'rebounded' | 'no_contact'
+    logical :: outcome_settled = .false.              !< false: decided in flight (docs/theory.md, Run outcome)
+    character(len=16) :: end_rule = ''                !< &pair end_rule: 'settled' | 'paper'
     integer :: collisions = 0
     logical :: has_first_collision = .false.          !< false: "first_collision": null
     type(collision_event_t) :: first_collision
@@ -94,9 +101,11 @@ module particle_output
     real(wp) :: wall_time = 0.0_wp                    !< s
   end type run_summary_t
 
-  !> Names of the events-table columns written by append_collision_event (under /events).
+  !> Names of the events-table columns written by append_collision_event (under /events); with more
+  !> than two bodies also body_columns (the colliding bodies' numbers, stored as reals).
   character(len=*), parameter :: collision_event_columns(8) = [character(len=22) :: 'time', 'theta1', 'phi1', &
       'theta2', 'phi2', 'normal_velocity_before', 'normal_velocity_after', 'psi']
+  character(len=*), parameter :: body_columns(2) = [character(len=6) :: 'first', 'second']
 
   type :: column_t
     character(len=:), allocatable :: name
@@ -119,6 +128,7 @@ module particle_output
     type(h5_file_t) :: file
     logical :: active = .false.
     logical :: pair_layout = .false.         !< append_pair_sample used: events table always present
+    integer :: bodies = 2                    !< > 2: the events table also has /events/first, /events/second
     type(table_t) :: samples, events
   end type particle_output_t
 
@@ -143,6 +153,7 @@ contains
     out%samples%group = ''
     out%events%group = 'events/'
     allocate(out%samples%columns(0), out%events%columns(0))
+    out%bodies = metadata%bodies
     if (.not. out%active) return
     call h5_create(out%file, path, serial=.true.)
     call h5_write_string(out%file, 'name', trim(metadata%name))
@@ -151,6 +162,7 @@ contains
     call h5_write_array(out%file, 'aspect_ratio', metadata%aspect_ratio)
     call h5_write_array(out%file, 'radius', metadata%radius)
     call h5_write_array(out%file, 'seed', metadata%seed)
+    if (metadata%bodies > 2) call h5_write_array(out%file, 'bodies', int(metadata%bodies, i8))
   end subroutine particle_output_open
 
   !> Write the buffered rows and push them to disk (a crash loses nothing written before).
@@ -173,6 +185,11 @@ contains
       do i = 1, size(collision_event_columns)
         call h5_append(out%file, 'events/'//trim(collision_event_columns(i)), [real(wp) ::])
       end do
+      if (out%bodies > 2) then
+        do i = 1, size(body_columns)
+          call h5_append(out%file, 'events/'//trim(body_columns(i)), [real(wp) ::])
+        end do
+      end if
     end if
     call h5_close(out%file)
     out%active = .false.
@@ -302,18 +319,28 @@ contains
   ! The pair scenes' layout
   ! ---------------------------------------------------------------------------------------------
 
-  !> One row of the pair time series: /time, /particle1/..., /particle2/..., /pair/...
+  !> One row of the time series of a pair: /time, /particle1/..., /particle2/..., /pair/...
   subroutine append_pair_sample(out, time, particles, pair)
     type(particle_output_t), intent(inout) :: out
     real(wp), intent(in) :: time
     type(particle_record_t), intent(in) :: particles(2)
     type(pair_record_t), intent(in) :: pair
-    character(len=10) :: group
-    integer :: n
+    call append_particles_sample(out, time, particles, [pair])
+  end subroutine append_pair_sample
+
+  !> One row of the time series of N bodies: /time, /particle<n>/... for n = 1..N, and per pair
+  !> /pair/... when N = 2 (the pair layout), /pair<i>_<j>/... otherwise.
+  subroutine append_particles_sample(out, time, particles, pairs)
+    type(particle_output_t), intent(inout) :: out
+    real(wp), intent(in) :: time
+    type(particle_record_t), intent(in) :: particles(:)
+    type(pair_record_t), intent(in) :: pairs(:)
+    character(len=32) :: group
+    integer :: n, p
     if (.not. out%active) return
     out%pair_layout = .true.
     call sample_value(out, 'time', time)
-    do n = 1, 2
+    do n = 1, size(particles)
       write(group, '(a,i0,a)') 'particle', n, '/'
       call sample_value(out, trim(group)//'position', particles(n)%position)
       call sample_value(out, trim(group)//'quaternion', particles(n)%quaternion)
@@ -326,16 +353,23 @@ contains
       call sample_value(out, trim(group)//'torque_dlvo', particles(n)%torque_dlvo)
       call sample_value(out, trim(group)//'torque_collision', particles(n)%torque_collision)
     end do
-    call sample_value(out, 'pair/gap', pair%gap)
-    call sample_value(out, 'pair/closest_point1', pair%closest_point1)
-    call sample_value(out, 'pair/closest_point2', pair%closest_point2)
-    call sample_value(out, 'pair/chi_eta', pair%chi_eta)
-    call sample_value(out, 'pair/relative_velocity', pair%relative_velocity)
-    call sample_value(out, 'pair/vdw_force', pair%vdw_force)
+    do p = 1, size(pairs)
+      if (size(particles) == 2) then
+        group = 'pair/'
+      else
+        write(group, '(a,i0,a,i0,a)') 'pair', pairs(p)%first, '_', pairs(p)%second, '/'
+      end if
+      call sample_value(out, trim(group)//'gap', pairs(p)%gap)
+      call sample_value(out, trim(group)//'closest_point1', pairs(p)%closest_point1)
+      call sample_value(out, trim(group)//'closest_point2', pairs(p)%closest_point2)
+      call sample_value(out, trim(group)//'chi_eta', pairs(p)%chi_eta)
+      call sample_value(out, trim(group)//'relative_velocity', pairs(p)%relative_velocity)
+      call sample_value(out, trim(group)//'vdw_force', pairs(p)%vdw_force)
+    end do
     call sample_end(out)
-  end subroutine append_pair_sample
+  end subroutine append_particles_sample
 
-  !> One row of the events table (/events/<collision_event_columns>).
+  !> One row of the events table (/events/<collision_event_columns>, and the bodies with more than two).
   subroutine append_collision_event(out, event)
     type(particle_output_t), intent(inout) :: out
     type(collision_event_t), intent(in) :: event
@@ -349,6 +383,10 @@ contains
     call event_value(out, 'normal_velocity_before', event%normal_velocity_before)
     call event_value(out, 'normal_velocity_after', event%normal_velocity_after)
     call event_value(out, 'psi', event%psi)
+    if (out%bodies > 2) then
+      call event_value(out, 'first', real(event%first, wp))
+      call event_value(out, 'second', real(event%second, wp))
+    end if
     call event_end(out)
   end subroutine append_collision_event
 
@@ -377,6 +415,8 @@ contains
     call json_add(object, 'aspect_ratio', summary%aspect_ratio)
     call json_add(object, 'fluid', trim(summary%fluid))
     call json_add(object, 'outcome', trim(summary%outcome))
+    call json_add(object, 'outcome_settled', summary%outcome_settled)
+    call json_add(object, 'end_rule', trim(summary%end_rule))
     call json_add(object, 'collisions', summary%collisions)
     if (summary%has_first_collision) then
       call json_add(first, 'time', summary%first_collision%time)

@@ -24,7 +24,7 @@ module collision
   use vector_algebra, only: skew, cross
   use config_collision, only: collision_config_t
   use rigid_body, only: rigid_body_t, inverse_inertia_lab, point_velocity, set_angular_velocity_lab, &
-                        angular_velocity_lab
+                        angular_velocity_lab, kinetic_energy
   use closest_points, only: closest_points_t
   use logger, only: log_line
   implicit none
@@ -247,14 +247,8 @@ contains
 
   pure real(wp) function pair_energy(body1, body2)
     type(rigid_body_t), intent(in) :: body1, body2
-    pair_energy = body_energy(body1) + body_energy(body2)
+    pair_energy = kinetic_energy(body1) + kinetic_energy(body2)
   end function pair_energy
-
-  pure real(wp) function body_energy(body)
-    type(rigid_body_t), intent(in) :: body
-    body_energy = 0.5_wp * body%mass * dot_product(body%velocity, body%velocity) &
-                  + 0.5_wp * sum(body%inertia_body * body%angular_velocity_body**2)
-  end function body_energy
 
   !> Inverse of a 3x3 matrix by cofactors (K is symmetric positive definite: m > 0, I > 0).
   pure function inverse3(a) result(b)

@@ -15,16 +15,23 @@ module dlvo
   use spheroid, only: spheroid_t, principal_curvatures, principal_directions
   use quaternion, only: rotate_to_lab
   use closest_points, only: closest_points_t
-  use rigid_body, only: rigid_body_t, point_velocity
+  use rigid_body, only: rigid_body_t
+  use collision, only: approach_speed
   implicit none
   private
   public :: dlvo_model_t, dlvo_setup, dlvo_log_constants, dlvo_force, dlvo_vdw_force, dlvo_edl_force, &
             dlvo_energy, dlvo_pair_forces, curvature_factor, chi_eta_eq14, chi_eta_derjaguin, &
             alpha_sine_squared, ion_number_density, grahame_surface_potential, reduced_surface_potential, &
-            dlvo_evaluation_t, dlvo_evaluate, contact_curvature_factor, relative_normal_energy, escape_energy
+            dlvo_evaluation_t, dlvo_evaluate, contact_curvature_factor, relative_normal_energy, escape_energy, &
+            dlvo_range, dlvo_range_debye_lengths
   public :: curvature_eq14, curvature_derjaguin, curvature_none
 
   integer, parameter :: curvature_eq14 = 1, curvature_derjaguin = 2, curvature_none = 3
+
+  !> The range of the DLVO well in Debye lengths (docs/theory.md, "Run outcome"): the EDL term has
+  !> fallen by exp(-60) ~ 1e-26 there, so the barrier and any secondary minimum lie well inside,
+  !> and beyond it only the weak vdW tail is left (U < 0, rising to 0).
+  real(wp), parameter :: dlvo_range_debye_lengths = 60.0_wp
 
   !> Every constant of Eq. 13, derived once from the deck (&dlvo) and the particle radius.
   type :: dlvo_model_t
@@ -99,13 +106,14 @@ contains
     type(rigid_body_t), intent(in) :: body1, body2
     type(closest_points_t), intent(in) :: contact
     real(wp) :: normal_speed, reduced_mass
-    normal_speed = dot_product(point_velocity(body1, contact%point1) - point_velocity(body2, contact%point2), contact%normal)
+    normal_speed = approach_speed(body1, body2, contact%point1, contact%point2, contact%normal)
     reduced_mass = body1%mass * body2%mass / (body1%mass + body2%mass)
     relative_normal_energy = 0.5_wp * reduced_mass * normal_speed**2
   end function relative_normal_energy
 
   !> Energy needed to escape from gap h to infinity at fixed chi_eta: max(0, max_{h' >= h} U(h')) - U(h)
-  !> (the EDL barrier, if any, lies within a few Debye lengths; beyond 60 of them U < 0 and rises to 0).
+  !> (the EDL barrier, if any, lies within a few Debye lengths; beyond dlvo_range U < 0 and rises to 0,
+  !> so the maximum is searched over [h, h + dlvo_range]).
   !> The pair is bound when relative_normal_energy < escape_energy.
   pure real(wp) function escape_energy(model, gap, chi_eta)
     type(dlvo_model_t), intent(in) :: model
@@ -114,13 +122,19 @@ contains
     integer :: i
     integer, parameter :: samples = 400
     top = 0.0_wp
-    span = 60.0_wp / model%debye_kappa
+    span = dlvo_range(model)
     do i = 0, samples
       h = max(gap, 0.0_wp) + span * (real(i, wp) / samples)**2
       top = max(top, dlvo_energy(model, h, chi_eta))
     end do
     escape_energy = top - dlvo_energy(model, gap, chi_eta)
   end function escape_energy
+
+  !> Range of the DLVO well (m): dlvo_range_debye_lengths Debye lengths, and at least the vdW cut-off.
+  pure real(wp) function dlvo_range(model)
+    type(dlvo_model_t), intent(in) :: model
+    dlvo_range = max(dlvo_range_debye_lengths / model%debye_kappa, model%vdw_cutoff)
+  end function dlvo_range
 
   !> Ion number density of a z:z electrolyte from the Debye parameter:
   !> kappa^2 = 2 n z^2 e^2 / (eps_r eps0 k_B T) (Israelachvili 1992, ch. 12).

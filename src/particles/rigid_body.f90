@@ -24,7 +24,6 @@ module rigid_body
   implicit none
   private
   public :: rigid_body_t, rigid_body_init, rigid_body_of_spheroid, rigid_body_step, rigid_body_kick, rigid_body_drift, &
-            rigid_body_substeps, &
             angular_velocity_lab, set_angular_velocity_lab, inverse_inertia_lab, point_velocity, &
             kinetic_energy, translational_kinetic_energy, rotational_kinetic_energy, linear_momentum, &
             angular_momentum, integrator_code, integrator_euler, integrator_verlet
@@ -203,16 +202,5 @@ contains
     body%angular_velocity_body(i) = (c * momentum(i) + s * momentum(j)) / body%inertia_body(i)
     body%angular_velocity_body(j) = (-s * momentum(i) + c * momentum(j)) / body%inertia_body(j)
   end subroutine free_rotation_about_axis
-
-  !> n_sub particle steps of dt / n_sub under loads frozen over the fluid step (docs/design.md, sub-steps).
-  pure subroutine rigid_body_substeps(body, force, torque, dt, n_sub, integrator)
-    type(rigid_body_t), intent(inout) :: body
-    real(wp), intent(in) :: force(3), torque(3), dt
-    integer, intent(in) :: n_sub, integrator
-    integer :: k
-    do k = 1, n_sub
-      call rigid_body_step(body, force, torque, dt / real(n_sub, wp), integrator)
-    end do
-  end subroutine rigid_body_substeps
 
 end module rigid_body

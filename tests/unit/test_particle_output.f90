@@ -117,7 +117,8 @@ program test_particle_output
 
   ! summary.json
   summary = run_summary_t(name='pair "1" \ test', seed=1234567890123_i8, shape='disk', aspect_ratio=0.2_wp, &
-                          fluid='none', outcome='agglomerated', collisions=3, has_first_collision=.true., &
+                          fluid='none', outcome='agglomerated', outcome_settled=.true., end_rule='settled', &
+                          collisions=3, has_first_collision=.true., &
                           first_collision=event, max_vdw_force=1.234567890123456789e-9_wp, final_gap=-2.0e-9_wp, &
                           final_relative_velocity=0.0_wp, psi_final=1.0_wp / 3.0_wp, end_time=2.0e-3_wp, &
                           steps=20000_i8, wall_time=0.25_wp)
@@ -138,7 +139,9 @@ program test_particle_output
     write(i, '(a)') 'f = s["first_collision"]'
     write(i, '(a)') 'assert f["time"] == 401 * 1e-6 + 1.0 / 3.0 * 1e-7 and f["theta1"] == 0.1 * 401 and f["psi"] == 0.25'
     write(i, '(a)') 'assert f["normal_velocity_before"] == 1e-3 and f["normal_velocity_after"] == -0.5e-3'
-    write(i, '(a)') 'keys = ["name", "seed", "shape", "aspect_ratio", "fluid", "outcome", "collisions", "first_collision",'
+    write(i, '(a)') 'assert s["outcome_settled"] is True and s["end_rule"] == "settled"'
+    write(i, '(a)') 'keys = ["name", "seed", "shape", "aspect_ratio", "fluid", "outcome", "outcome_settled", "end_rule",'
+    write(i, '(a)') '        "collisions", "first_collision",'
     write(i, '(a)') '        "max_vdw_force", "final_gap", "final_relative_velocity", "psi_final", "end_time", "steps",'
     write(i, '(a)') '        "wall_time"]'
     write(i, '(a)') 'assert list(s) == keys, list(s)'
