@@ -30,6 +30,7 @@ module immersed_geometry
   use, intrinsic :: iso_fortran_env, only: int8
   use agglo_kinds, only: wp
   use error_handling, only: fatal
+  use periodic_box, only: minimum_image
   use fluid_grid, only: fluid_grid_t, x_centre, y_centre, z_centre, x_face, y_face, z_face
   use quaternion, only: rotate_to_body, rotation_matrix
   use spheroid, only: spheroid_t, implicit_function, support_value
@@ -37,7 +38,7 @@ module immersed_geometry
   implicit none
   private
   public :: immersed_body_t, immersed_options_t, ghost_node_t, component_nodes_t, immersed_geometry_t
-  public :: classify_nodes, minimum_image, node_position, thin_dimension_cells
+  public :: classify_nodes, node_position, thin_dimension_cells
   public :: node_fluid, node_ghost, node_interior
 
   integer(int8), parameter :: node_fluid = 0_int8, node_ghost = 1_int8, node_interior = 2_int8
@@ -97,14 +98,6 @@ module immersed_geometry
   end type immersed_geometry_t
 
 contains
-
-  !> Periodic minimum image of a separation d in a box of edge length box: d - box nint(d/box),
-  !> in [-box/2, box/2]. (To be shared with the particle system's periodic geometry.)
-  elemental function minimum_image(d, box) result(image)
-    real(wp), intent(in) :: d, box
-    real(wp) :: image
-    image = d - box * anint(d / box)
-  end function minimum_image
 
   !> Position (m) of node (i, j, k) of velocity component `component` (1 u, 2 v, 3 w), i and j
   !> global, k local to this rank (any integers: the positions continue beyond the box).

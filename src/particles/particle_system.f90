@@ -40,10 +40,11 @@ module particle_system
   use dlvo, only: dlvo_model_t, dlvo_evaluation_t, dlvo_evaluate
   use collision, only: collision_model_t, collision_result_t, collision_detected, collide
   use vector_algebra, only: cross
+  use periodic_box, only: image_shift
   implicit none
   private
   public :: particle_models_t, particle_pair_t, particle_loads_t, particle_system_t, particle_system_create, &
-            particle_system_interact, particle_system_step, particle_loads_zero, minimum_image, &
+            particle_system_interact, particle_system_step, particle_loads_zero, &
             unwrapped_position, pair_image, pair_body_image, particle_system_energy
 
   !> The pair models and how the bodies move; set up once by the scene.
@@ -272,24 +273,6 @@ contains
       loads%torque(:, pair%second) = loads%torque(:, pair%second) + pair%dlvo%torque2
     end associate
   end subroutine dlvo_pair
-
-  !> Minimum image of a separation vector: each periodic component into [-L/2, L/2].
-  pure function minimum_image(separation, box_length) result(image)
-    real(wp), intent(in) :: separation(3), box_length(3)
-    real(wp) :: image(3)
-    image = separation + image_shift(separation, box_length)
-  end function minimum_image
-
-  !> The whole number of periods to add to a separation to get its minimum image (0 where unbounded).
-  pure function image_shift(separation, box_length) result(shift)
-    real(wp), intent(in) :: separation(3), box_length(3)
-    real(wp) :: shift(3)
-    integer :: k
-    shift = 0.0_wp
-    do k = 1, 3
-      if (box_length(k) > 0.0_wp) shift(k) = -box_length(k) * anint(separation(k) / box_length(k))
-    end do
-  end function image_shift
 
   !> Shift (m) that takes the second body of a pair to its minimum image next to the first; zero
   !> without a box (so the unbounded pair scenes do exactly the arithmetic they always did).

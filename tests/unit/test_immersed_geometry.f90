@@ -12,7 +12,8 @@ program test_immersed_geometry
   use spheroid, only: make_spheroid
   use fluid_grid, only: fluid_grid_t, grid_create
   use immersed_geometry, only: immersed_body_t, immersed_options_t, immersed_geometry_t, classify_nodes, &
-                               minimum_image, thin_dimension_cells, node_position
+                               thin_dimension_cells, node_position
+  use periodic_box, only: minimum_image
   use immersed_reference, only: record_errors_t, check_geometry_against_reference
   use wall_clock, only: wall_time
   use test_framework, only: test_start, test_finish, check, check_close, check_below, check_above, check_equal

@@ -17,8 +17,9 @@ program test_particle_system
   use pair_setup, only: pair_t, build_pair
   use pair_outcome, only: pair_outcome_t, pair_outcome_of, pair_outcome_rules_of
   use particle_system, only: particle_models_t, particle_system_t, particle_system_create, particle_system_interact, &
-                             particle_system_step, particle_system_energy, unwrapped_position, minimum_image, &
+                             particle_system_step, particle_system_energy, unwrapped_position, &
                              pair_body_image
+  use periodic_box, only: minimum_image
   use particle_system_state, only: particle_system_state_t, particle_system_save, particle_system_restore
   use test_framework, only: test_start, test_finish, check, check_close, check_below, check_equal
   implicit none

@@ -1,0 +1,27 @@
+!> Minimum-image arithmetic in a periodic box, shared by the particle system (pair separations)
+!> and the immersed boundary (node-to-body offsets). A period of 0 (or less) means an unbounded
+!> direction: the separation is returned unchanged.
+module periodic_box
+  use agglo_kinds, only: wp
+  implicit none
+  private
+  public :: minimum_image, image_shift
+
+contains
+
+  !> The whole number of periods to add to a separation to get its minimum image (0 where unbounded).
+  elemental function image_shift(separation, period) result(shift)
+    real(wp), intent(in) :: separation, period
+    real(wp) :: shift
+    shift = 0.0_wp
+    if (period > 0.0_wp) shift = -period * anint(separation / period)
+  end function image_shift
+
+  !> The image of a separation in (-period/2, period/2] (ties go away from zero, as anint does).
+  elemental function minimum_image(separation, period) result(image)
+    real(wp), intent(in) :: separation, period
+    real(wp) :: image
+    image = separation + image_shift(separation, period)
+  end function minimum_image
+
+end module periodic_box
