@@ -11,7 +11,7 @@ module resolved_scene
   use run_directory, only: run_file
   use checkpoint_files, only: newest_checkpoint
   use physical_constants, only: two_pi
-  use fluid_solver, only: fluid_solver_t, fluid_solver_create, timer_io
+  use fluid_solver, only: fluid_solver_t, fluid_solver_create, fluid_select_pressure_scheme, timer_io
   use initial_fields, only: set_rest, set_taylor_green, set_random_field
   use fluid_diagnostics, only: fluid_statistics_t, compute_fluid_statistics, advective_rate
   use time_step_control, only: next_time_step, explicit_viscous_limit
@@ -128,6 +128,7 @@ contains
     path = ''
     call fluid_solver_create(solver, cfg%grid%nx, cfg%grid%ny, cfg%grid%nz, cfg%grid%length_x, cfg%grid%length_y, &
         cfg%grid%length_z, cfg%fluid%viscosity, cfg%fluid%density, cfg%fluid%viscous_scheme, cfg%fluid%fft_planning)
+    call fluid_select_pressure_scheme(solver, trim(cfg%fluid%pressure_scheme))
     if (cfg%run%restart) then
       path = newest_checkpoint()
       if (len(path) == 0) call fatal('deck: &run restart = .true. but the run directory '//run_file('checkpoints')// &
