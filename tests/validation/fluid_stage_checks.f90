@@ -101,7 +101,7 @@ contains
   subroutine check_staged_matches_fused(viscous_scheme, pressure_scheme, suffix)
     character(len=*), intent(in) :: viscous_scheme, pressure_scheme, suffix
     type(fluid_solver_t) :: fused, staged
-    real(wp), allocatable :: fu(:, :, :), fv(:, :, :), fw(:, :, :)
+    real(wp), allocatable :: fu(:, :, :), fv(:, :, :), fw(:, :, :), halo_check(:, :, :)
     real(wp) :: velocity, pressure, history
     integer :: s
     call make_case(fused, viscous_scheme, pressure_scheme, fu, fv, fw)
@@ -124,6 +124,11 @@ contains
     call check_below(history, 1.0e-13_wp, 'staged_step_history_matches_fused_'//viscous_scheme//'_'// &
                      pressure_scheme//suffix)
     call check_below(abs(staged%time - fused%time) / fused%time, 1.0e-15_wp, 'staged_step_time_matches_fused_'// &
+                     viscous_scheme//'_'//pressure_scheme//suffix)
+    ! Every halo of the pressure is current after a step (copies of stored values: exact).
+    halo_check = staged%pressure
+    call exchange_halos(staged%grid, halo_check)
+    call check_below(full_difference(halo_check, staged%pressure), 0.0_wp, 'staged_step_pressure_halos_current_'// &
                      viscous_scheme//'_'//pressure_scheme//suffix)
   end subroutine check_staged_matches_fused
 
