@@ -8,13 +8,14 @@ cd "$(dirname "$0")/.."
 BUILD=${BUILD:-build}
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 make --no-print-directory -s build "$BUILD/bench/bench_fluid" "$BUILD/bench/bench_pair" \
-  "$BUILD/bench/bench_forcing"
+  "$BUILD/bench/bench_forcing" "$BUILD/bench/bench_stages"
 work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
 exe=$PWD/$BUILD/bench/bench_fluid
 pair_exe=$PWD/$BUILD/bench/bench_pair
 forcing_exe=$PWD/$BUILD/bench/bench_forcing
+stages_exe=$PWD/$BUILD/bench/bench_stages
 agglo=$PWD/$BUILD/agglo
-parts=${BENCH_PARTS:-fluid pair forcing}   # e.g. BENCH_PARTS=pair make bench
+parts=${BENCH_PARTS:-fluid stages pair forcing}   # e.g. BENCH_PARTS=pair make bench
 echo "Agglo fluid benchmark on $(nproc) cores: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')"
 echo "compiler: $(mpifort --version | head -n 1); flags: -O3 -march=native -funroll-loops$(grep -q avx512f /proc/cpuinfo && echo ' (momentum_terms: -mprefer-vector-width=512)'); FFTW_ESTIMATE plans"
 echo "    N  R  fft_pair   poisson      step  adv+diff   proj(P)      halo    io(4f) pois(copy)  [ms, medians]  ns/pt/step  poisson/fft  step/fft"
@@ -26,6 +27,20 @@ for n in 64 128; do
     echo "$line" | awk -v n=$n '{ printf "%s  %10.1f  %11.2f  %8.2f\n", $0, $5 * 1e6 / (n^3), $4 / $3, $5 / $3 }'
   done
 done
+fi
+
+# The staged step (fluid_predict, fluid_project, fluid_finish_step) against the fused one, each stage
+# in ns per grid point next to the bytes it moves and the floor set by the memory bandwidth (a
+# STREAM-like triad on the same ranks). Minima over the repetitions (docs/performance.md).
+if [[ $parts == *stages* ]]; then
+  echo
+  echo "Staged step and the roofline:"
+  for n in 64 128; do
+    for ranks in 1 2; do
+      (cd "$work" && mpirun -np $ranks "$stages_exe" $n $(( n == 64 ? 30 : 10 )) explicit)
+    done
+  done
+  (cd "$work" && mpirun -np 1 "$stages_exe" 128 10 crank_nicolson)
 fi
 
 # Eswaran-Pope forcing per step against a whole Crank-Nicolson fluid step (input/hit_box.nml);
