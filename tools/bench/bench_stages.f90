@@ -7,11 +7,12 @@
 !> timed), and the Poisson solve alone (in FFTW's buffer, as the step does it). Then a STREAM-like
 !> triad a = b + s c runs on every rank at once, on arrays of 8 M doubles per rank (far beyond the
 !> last-level cache): the machine's memory bandwidth on the same cores, the floor of any sweep.
-!> Prints the minima over the repetitions (the least-disturbed run on a shared machine; a part
-!> without the Poisson solve is the minimum of its per-repetition difference) and, for the ratios,
-!> also their medians; then per stage its ns per grid point, the bytes per point it
-!> moves (STREAM's count: 8 bytes per array element read and per element written, no
-!> write-allocate), the floor bytes / bandwidth, and the stage's time in multiples of the floor.
+!> Prints the minima over the repetitions (the least-disturbed run on a shared machine) and, for
+!> the ratios, also their medians; then per stage (medians: a part without the Poisson solve is
+!> the median of its per-repetition difference, robust where a minimum of differences is not) its
+!> ns per grid point, the bytes per point it moves (STREAM's count: 8 bytes per array element read
+!> and per element written, no write-allocate), the floor bytes / bandwidth, and the stage's time
+!> in multiples of the floor.
 program bench_stages
   use agglo_kinds, only: wp, i8
   use parallel_env, only: parallel_start, parallel_stop, n_ranks, is_root, barrier, global_max, global_sum
@@ -75,24 +76,24 @@ program bench_stages
         1.0e3_wp * minval(step_fused), 1.0e3_wp * minval(step_staged), '; staged/fused min, median', &
         minval(step_staged) / minval(step_fused), median(step_staged / step_fused), '; fused/FFT min, median', &
         minval(step_fused) / minval(fft), median(step_fused / fft)
-    write(*, '(a)') '  stage                                      ms   ns/pt   B/pt  floor ns/pt  x floor'
+    write(*, '(a)') '  stage (medians)                            ms   ns/pt   B/pt  floor ns/pt  x floor'
     ! Predictor sweep: reads u, v, w and E^{n-1}, writes u* (over E^{n-1}) and E^n: 12 arrays.
     ! Crank-Nicolson adds per component a copy into the FFT buffer and back (4 arrays) and an FFT pair.
     cn_bytes = 0
     if (cn) cn_bytes = 3 * 4 * 8
     call stage_line('predictor (sweep + halos'//trim(merge(' + 3 Helmholtz)', ')              ', cn)), &
-                    minval(predict), 96.0_wp + cn_bytes)
+                    median(predict), 96.0_wp + cn_bytes)
     ! Projection without the Poisson solve: the divergence reads u*, v*, w* and writes the buffer
     ! (4 arrays); the correction reads and writes u*, v*, w* in place, reads phi, reads and writes p
     ! (9); Crank-Nicolson also keeps L phi (2) and reads it back (1).
-    call stage_line('projection - Poisson (div, correction, p)', minval(project - poisson), &
+    call stage_line('projection - Poisson (div, correction, p)', median(project - poisson), &
                     merge(128.0_wp, 104.0_wp, cn))
-    call stage_line('Poisson solve (in buffer; FFT-bound)', minval(poisson), 0.0_wp)
-    call stage_line('finish (history rotation)', minval(finish), 0.0_wp)
+    call stage_line('Poisson solve (in buffer; FFT-bound)', median(poisson), 0.0_wp)
+    call stage_line('finish (history rotation)', median(finish), 0.0_wp)
     ! The fused sweep computes the divergence from the planes still in cache (8 instead of 32).
-    call stage_line('fused step (without the Poisson solve)', minval(step_fused - poisson), &
+    call stage_line('fused step (without the Poisson solve)', median(step_fused - poisson), &
                     merge(320.0_wp, 176.0_wp, cn))
-    call stage_line('staged step (without the Poisson solve)', minval(step_staged - poisson), &
+    call stage_line('staged step (without the Poisson solve)', median(step_staged - poisson), &
                     merge(320.0_wp, 200.0_wp, cn))
   end if
   call parallel_stop()
