@@ -49,8 +49,8 @@ contains
     call check_own_predictor_solver(suffix)
   end subroutine run_fluid_stage_checks
 
-  !> A random field in a 1 x 0.5 x 0.25 box (32 x 16 x 8 cells: different dx, dy, dz) of water-like
-  !> viscosity scaled so that nu dt / dx^2 ~ 0.05, and a random body force.
+  !> A random field in a 1 x 0.5 x 0.25 box (32 x 16 x 8 cells; on 2 ranks 4 planes each), viscosity
+  !> 0.02 (nu dt / dx^2 about 0.02), and a random body force.
   subroutine make_case(solver, viscous_scheme, pressure_scheme, force_u, force_v, force_w)
     type(fluid_solver_t), intent(inout) :: solver
     character(len=*), intent(in) :: viscous_scheme, pressure_scheme
