@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Agglo benchmark (`make bench`): fluid time per step and its parts at 64^3 and 128^3 on 1 and 2
-# ranks, and the Poisson solve against one forward + inverse 3-D FFT of the same grid.
+# ranks, and the Poisson solve against one forward + inverse 3-D FFT of the same grid; the staged
+# step against the fused one with each stage against the memory-bandwidth floor (BENCH_PARTS=stages).
 # Medians over repetitions (the machine may be shared: compare ratios; poisson = the in-buffer solve
 # the step uses, pois(copy) = the poisson_solve API with its copies in and out). Results: docs/performance.md.
 set -eu
