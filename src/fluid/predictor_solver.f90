@@ -20,11 +20,7 @@ module predictor_solver
   use momentum_terms, only: laplacian
   implicit none
   private
-  public :: predictor_solver_t, fft_predictor_solver_t, apply_predictor_operator, &
-            component_u, component_v, component_w
-
-  !> Which staggered grid a velocity field lives on (fluid_grid: u on x faces, v on y, w on z).
-  integer, parameter :: component_u = 1, component_v = 2, component_w = 3
+  public :: predictor_solver_t, fft_predictor_solver_t, apply_predictor_operator
 
   !> Solves A u* = b for the three velocity components of one step.
   type, abstract :: predictor_solver_t
