@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Agglo benchmark (`make bench`): fluid time per step and its parts at 64^3 and 128^3 on 1 and 2
-# ranks, and the Poisson solve against one forward + inverse 3-D FFT of the same grid.
+# ranks, and the Poisson solve against one forward + inverse 3-D FFT of the same grid; the staged
+# step against the fused one with each stage against the memory-bandwidth floor (BENCH_PARTS=stages).
 # Medians over repetitions (the machine may be shared: compare ratios; poisson = the in-buffer solve
 # the step uses, pois(copy) = the poisson_solve API with its copies in and out). Results: docs/performance.md.
 set -eu
@@ -8,13 +9,14 @@ cd "$(dirname "$0")/.."
 BUILD=${BUILD:-build}
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 make --no-print-directory -s build "$BUILD/bench/bench_fluid" "$BUILD/bench/bench_pair" \
-  "$BUILD/bench/bench_forcing"
+  "$BUILD/bench/bench_forcing" "$BUILD/bench/bench_stages"
 work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
 exe=$PWD/$BUILD/bench/bench_fluid
 pair_exe=$PWD/$BUILD/bench/bench_pair
 forcing_exe=$PWD/$BUILD/bench/bench_forcing
+stages_exe=$PWD/$BUILD/bench/bench_stages
 agglo=$PWD/$BUILD/agglo
-parts=${BENCH_PARTS:-fluid pair forcing}   # e.g. BENCH_PARTS=pair make bench
+parts=${BENCH_PARTS:-fluid stages pair forcing}   # e.g. BENCH_PARTS=pair make bench
 echo "Agglo fluid benchmark on $(nproc) cores: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')"
 echo "compiler: $(mpifort --version | head -n 1); flags: -O3 -march=native -funroll-loops$(grep -q avx512f /proc/cpuinfo && echo ' (momentum_terms: -mprefer-vector-width=512)'); FFTW_ESTIMATE plans"
 echo "    N  R  fft_pair   poisson      step  adv+diff   proj(P)      halo    io(4f) pois(copy)  [ms, medians]  ns/pt/step  poisson/fft  step/fft"
@@ -27,6 +29,20 @@ for n in 64 128; do
   done
 done
 echo "Timer registry, last run above ($n^3, $ranks ranks; averages over its steps, not medians): $(cat "$work/timer_breakdown.txt")"
+fi
+
+# The staged step (fluid_predict, fluid_project, fluid_finish_step) against the fused one, each stage
+# in ns per grid point next to the bytes it moves and the floor set by the memory bandwidth (a
+# STREAM-like triad on the same ranks). Minima over the repetitions (docs/performance.md).
+if [[ $parts == *stages* ]]; then
+  echo
+  echo "Staged step and the roofline:"
+  for n in 64 128; do
+    for ranks in 1 2; do
+      (cd "$work" && mpirun -np $ranks "$stages_exe" $n $(( n == 64 ? 30 : 10 )) explicit)
+    done
+  done
+  (cd "$work" && mpirun -np 1 "$stages_exe" 128 10 crank_nicolson)
 fi
 
 # Eswaran-Pope forcing per step against a whole Crank-Nicolson fluid step (input/hit_box.nml);

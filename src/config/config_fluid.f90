@@ -16,13 +16,14 @@ module config_fluid
     real(wp) :: init_amplitude = 1.0e-3_wp         !< m/s, velocity scale of 'taylor_green' / rms of 'random'
     real(wp) :: init_peak_wavenumber = 2.0_wp      !< spectrum peak of 'random', in units of 2 pi / length_x
     character(len=16) :: fft_planning = 'estimate' !< 'estimate' (reproducible) | 'measure' (faster plans, not bit-reproducible)
+    character(len=16) :: pressure_scheme = 'non_incremental'  !< 'non_incremental' | 'incremental' (fluid_solver)
   end type fluid_config_t
 
   real(wp) :: density, viscosity, init_amplitude, init_peak_wavenumber
-  character(len=16) :: viscous_scheme, init, fft_planning
+  character(len=16) :: viscous_scheme, init, fft_planning, pressure_scheme
   character(len=256) :: init_file
   namelist /fluid/ density, viscosity, viscous_scheme, init, init_file, init_amplitude, init_peak_wavenumber, &
-                  fft_planning
+                  fft_planning, pressure_scheme
 
 contains
 
@@ -31,6 +32,7 @@ contains
     density = cfg%density; viscosity = cfg%viscosity; viscous_scheme = cfg%viscous_scheme
     init = cfg%init; init_file = cfg%init_file; init_amplitude = cfg%init_amplitude
     init_peak_wavenumber = cfg%init_peak_wavenumber; fft_planning = cfg%fft_planning
+    pressure_scheme = cfg%pressure_scheme
   end subroutine to_namelist
 
   subroutine from_namelist(cfg)
@@ -38,6 +40,7 @@ contains
     cfg%density = density; cfg%viscosity = viscosity; cfg%viscous_scheme = viscous_scheme
     cfg%init = init; cfg%init_file = init_file; cfg%init_amplitude = init_amplitude
     cfg%init_peak_wavenumber = init_peak_wavenumber; cfg%fft_planning = fft_planning
+    cfg%pressure_scheme = pressure_scheme
   end subroutine from_namelist
 
   subroutine read_fluid_group(deck, cfg)
@@ -60,6 +63,8 @@ contains
     call require_nonnegative('fluid', 'init_amplitude', cfg%init_amplitude)
     call require_positive('fluid', 'init_peak_wavenumber', cfg%init_peak_wavenumber)
     call require_option('fluid', 'fft_planning', cfg%fft_planning, [character(len=16) :: 'estimate', 'measure'])
+    call require_option('fluid', 'pressure_scheme', cfg%pressure_scheme, &
+                        [character(len=16) :: 'non_incremental', 'incremental'])
     if (cfg%init == 'file' .and. len_trim(cfg%init_file) == 0) call input_error('fluid', 'init_file', &
         '''''', 'the path of an Agglo field snapshot or checkpoint (needed by init = ''file'')')
   end subroutine check_fluid_group

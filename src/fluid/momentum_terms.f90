@@ -24,8 +24,8 @@ module momentum_terms
   private
   public :: predictor_coefficients_t, predictor_plane, divergence_plane, correction_plane, laplacian
 
-  !> Coefficients of the predictor u* = u + dt (b1 E^n + b0 E^{n-1}) + implicit_weight D(u) [+ dt f],
-  !> E^n = -N(u) + explicit_weight D(u), D(u) = diffusion L u.
+  !> Coefficients of the predictor u* = u + dt (b1 E^n + b0 E^{n-1}) + implicit_weight D(u) [+ dt f]
+  !> [- pressure_factor G p], E^n = -N(u) + explicit_weight D(u), D(u) = diffusion L u.
   !> Explicit viscous term: diffusion = nu, explicit_weight = 1, implicit_weight = 0;
   !> Crank-Nicolson right-hand side: diffusion = nu dt / 2, explicit_weight = 0, implicit_weight = 1.
   !> (Weights 0 and 1 are exact in floating point: both cases give the unfused formulas bit for bit.)
@@ -33,6 +33,7 @@ module momentum_terms
     real(wp) :: dt = 0, b1 = 1, b0 = 0
     real(wp) :: diffusion = 0                   !< m^2/s (nu) or m^2 (nu dt / 2)
     real(wp) :: explicit_weight = 1, implicit_weight = 0
+    real(wp) :: pressure_factor = 0             !< m^3 s/kg: dt / rho with the incremental pressure
   end type predictor_coefficients_t
 
 contains
@@ -40,9 +41,10 @@ contains
   !> Plane k of the predictor for the three components at once (interior). u, v, w with current
   !> halos; on entry star_* hold E^{n-1}, on exit u* (each point is read before it is written,
   !> so the history array doubles as the predictor's output and nothing extra is allocated);
-  !> explicit_* receive E^n. Optional body force f (m/s^2) added as dt f.
+  !> explicit_* receive E^n. Optional body force f (m/s^2) added as dt f; optional pressure p (Pa,
+  !> cell centres, halos current) enters as - (dt / rho) G p (the incremental pressure scheme).
   subroutine predictor_plane(grid, k, c, u, v, w, explicit_u, explicit_v, explicit_w, star_u, star_v, star_w, &
-                             force_u, force_v, force_w)
+                             force_u, force_v, force_w, pressure)
     type(fluid_grid_t), intent(in) :: grid
     integer, intent(in) :: k
     type(predictor_coefficients_t), intent(in) :: c
@@ -50,8 +52,9 @@ contains
     real(wp), intent(inout), contiguous :: explicit_u(0:, 0:, 0:), explicit_v(0:, 0:, 0:), explicit_w(0:, 0:, 0:)
     real(wp), intent(inout), contiguous :: star_u(0:, 0:, 0:), star_v(0:, 0:, 0:), star_w(0:, 0:, 0:)
     real(wp), intent(in), optional :: force_u(0:, 0:, 0:), force_v(0:, 0:, 0:), force_w(0:, 0:, 0:)
+    real(wp), intent(in), optional :: pressure(0:, 0:, 0:)
     integer :: i, j, nx
-    real(wp) :: qx, qy, qz, cx, cy, cz, adv, diff, e
+    real(wp) :: qx, qy, qz, cx, cy, cz, adv, diff, e, px, py, pz
     nx = grid%nx
     qx = 0.25_wp / grid%dx; qy = 0.25_wp / grid%dy; qz = 0.25_wp / grid%dz
     cx = c%diffusion / grid%dx**2; cy = c%diffusion / grid%dy**2; cz = c%diffusion / grid%dz**2
@@ -112,6 +115,16 @@ contains
       if (present(force_w)) then
         do i = 1, nx
           star_w(i, j, k) = star_w(i, j, k) + c%dt * force_w(i, j, k)
+        end do
+      end if
+      ! The old pressure gradient last: u* = (...) + dt f - (dt / rho) G p^{n-1/2} (each component
+      ! at its own face, the gradient being the centred difference of the two cells it separates).
+      if (present(pressure)) then
+        px = c%pressure_factor / grid%dx; py = c%pressure_factor / grid%dy; pz = c%pressure_factor / grid%dz
+        do i = 1, nx
+          star_u(i, j, k) = star_u(i, j, k) - px * (pressure(i + 1, j, k) - pressure(i, j, k))
+          star_v(i, j, k) = star_v(i, j, k) - py * (pressure(i, j + 1, k) - pressure(i, j, k))
+          star_w(i, j, k) = star_w(i, j, k) - pz * (pressure(i, j, k + 1) - pressure(i, j, k))
         end do
       end if
     end do

@@ -1,0 +1,189 @@
+!> Values and gradients of grid fields at arbitrary points of the periodic box: any staggered
+!> velocity component (on its own MAC nodes) and the pressure (cell centres). What the immersed
+!> boundary's loads and the point-particle coupling read from the fluid.
+!>
+!> Value: trilinear interpolation between the 2 x 2 x 2 nodes of the field's own grid around the
+!> point (exact for trilinear fields, second order for smooth ones).
+!> Gradient: d f / d x_d is the centred difference of neighbouring nodes along d, which sits
+!> half-way between them (second order there), interpolated trilinearly to the point; so the
+!> gradient is exact for trilinear fields and second order for smooth ones.
+!>
+!> Parallel layout (docs/design.md, "Interpolation at points"): a point is evaluated by the rank
+!> whose slab holds its z (after wrapping it into the box), from that rank's field with its one
+!> halo layer; the collective routines then sum over ranks. One layer is enough: along x and y
+!> every rank holds the whole periodic plane (indices wrap), and along z the nodes around any
+!> point of the slab lie on the slab or on its halo planes. The one exception is d/dz of a field
+!> on the z faces (w) in the lower half of the slab's bottom cell, whose centred differences would
+!> need a second halo plane: there the two differences nearest the point inside the slab are
+!> extrapolated linearly (by at most half a cell: still second order, exact for trilinear fields).
+!> Fields must have current halos.
+module field_interpolation
+  use mpi_f08, only: MPI_Allreduce, MPI_IN_PLACE, MPI_SUM
+  use agglo_kinds, only: wp
+  use parallel_env, only: world, mpi_wp
+  use error_handling, only: fatal
+  use fluid_grid, only: fluid_grid_t
+  implicit none
+  private
+  public :: on_x_faces, on_y_faces, on_z_faces, on_cell_centres, point_on_this_rank, interpolate_here, &
+            gradient_here, interpolate_at_points, gradient_at_points, velocity_gradient_at_points
+
+  !> Where a field's nodes are (fluid_grid): u on the x faces, v on y, w on z, pressure at centres.
+  integer, parameter :: on_x_faces = 1, on_y_faces = 2, on_z_faces = 3, on_cell_centres = 4
+
+contains
+
+  !> True if the point (m, any position: it is wrapped into the box) is evaluated on this rank.
+  logical function point_on_this_rank(grid, point)
+    type(fluid_grid_t), intent(in) :: grid
+    real(wp), intent(in) :: point(3)
+    integer :: cell
+    ! min: z just below lz may divide to nz by rounding; it belongs to the top cell.
+    cell = min(floor(wrapped(point(3), grid%lz) / grid%dz), grid%nz - 1)
+    point_on_this_rank = (cell >= grid%z_offset .and. cell < grid%z_offset + grid%nz_local)
+  end function point_on_this_rank
+
+  !> The field's value at a point this rank evaluates (point_on_this_rank).
+  real(wp) function interpolate_here(grid, field, location, point) result(value)
+    type(fluid_grid_t), intent(in) :: grid
+    real(wp), intent(in) :: field(0:, 0:, 0:)
+    integer, intent(in) :: location
+    real(wp), intent(in) :: point(3)
+    value = stencil_sum(grid, field, location, point, 0)
+  end function interpolate_here
+
+  !> The field's gradient (per m) at a point this rank evaluates.
+  function gradient_here(grid, field, location, point) result(gradient)
+    type(fluid_grid_t), intent(in) :: grid
+    real(wp), intent(in) :: field(0:, 0:, 0:)
+    integer, intent(in) :: location
+    real(wp), intent(in) :: point(3)
+    real(wp) :: gradient(3)
+    integer :: d
+    do d = 1, 3
+      gradient(d) = stencil_sum(grid, field, location, point, d)
+    end do
+  end function gradient_here
+
+  !> values(p) = field at points(:, p) on every rank (collective; every rank passes the same points).
+  subroutine interpolate_at_points(grid, field, location, points, values)
+    type(fluid_grid_t), intent(in) :: grid
+    real(wp), intent(in) :: field(0:, 0:, 0:)
+    integer, intent(in) :: location
+    real(wp), intent(in) :: points(:, :)          !< (3, n), m
+    real(wp), intent(out) :: values(:)            !< (n)
+    integer :: p
+    values = 0
+    do p = 1, size(points, 2)
+      if (point_on_this_rank(grid, points(:, p))) values(p) = interpolate_here(grid, field, location, points(:, p))
+    end do
+    call MPI_Allreduce(MPI_IN_PLACE, values, size(values), mpi_wp, MPI_SUM, world)
+  end subroutine interpolate_at_points
+
+  !> gradients(:, p) = grad field at points(:, p) on every rank (collective).
+  subroutine gradient_at_points(grid, field, location, points, gradients)
+    type(fluid_grid_t), intent(in) :: grid
+    real(wp), intent(in) :: field(0:, 0:, 0:)
+    integer, intent(in) :: location
+    real(wp), intent(in) :: points(:, :)          !< (3, n), m
+    real(wp), intent(out) :: gradients(:, :)      !< (3, n), field unit per m
+    integer :: p
+    gradients = 0
+    do p = 1, size(points, 2)
+      if (point_on_this_rank(grid, points(:, p))) gradients(:, p) = gradient_here(grid, field, location, points(:, p))
+    end do
+    call MPI_Allreduce(MPI_IN_PLACE, gradients, size(gradients), mpi_wp, MPI_SUM, world)
+  end subroutine gradient_at_points
+
+  !> gradients(a, b, p) = d u_a / d x_b at points(:, p) (1/s) on every rank (collective); u, v, w
+  !> the staggered velocity with current halos.
+  subroutine velocity_gradient_at_points(grid, u, v, w, points, gradients)
+    type(fluid_grid_t), intent(in) :: grid
+    real(wp), intent(in) :: u(0:, 0:, 0:), v(0:, 0:, 0:), w(0:, 0:, 0:)
+    real(wp), intent(in) :: points(:, :)          !< (3, n), m
+    real(wp), intent(out) :: gradients(:, :, :)   !< (3, 3, n)
+    integer :: p
+    gradients = 0
+    do p = 1, size(points, 2)
+      if (.not. point_on_this_rank(grid, points(:, p))) cycle
+      gradients(1, :, p) = gradient_here(grid, u, on_x_faces, points(:, p))
+      gradients(2, :, p) = gradient_here(grid, v, on_y_faces, points(:, p))
+      gradients(3, :, p) = gradient_here(grid, w, on_z_faces, points(:, p))
+    end do
+    call MPI_Allreduce(MPI_IN_PLACE, gradients, size(gradients), mpi_wp, MPI_SUM, world)
+  end subroutine velocity_gradient_at_points
+
+  !> x wrapped into [0, length) (modulo alone can round up to length itself for tiny negative x).
+  pure real(wp) function wrapped(x, length)
+    real(wp), intent(in) :: x, length
+    wrapped = modulo(x, length)
+    if (wrapped >= length) wrapped = 0
+  end function wrapped
+
+  !> Sum over the point's stencil: the value (derivative = 0) or d/dx_derivative. Each direction
+  !> contributes up to 3 nodes (weights in axis_stencil); z indices are local to the slab.
+  real(wp) function stencil_sum(grid, field, location, point, derivative) result(total)
+    type(fluid_grid_t), intent(in) :: grid
+    real(wp), intent(in) :: field(0:, 0:, 0:)
+    integer, intent(in) :: location, derivative
+    real(wp), intent(in) :: point(3)
+    integer :: ix(3), iy(3), iz(3), a, b, c
+    real(wp) :: wx(3), wy(3), wz(3)
+    if (location < on_x_faces .or. location > on_cell_centres) call fatal('field_interpolation: unknown location')
+    call axis_stencil(wrapped(point(1), grid%lx), grid%dx, grid%nx, location /= on_x_faces, derivative == 1, .false., &
+                      0, 0, ix, wx)
+    call axis_stencil(wrapped(point(2), grid%ly), grid%dy, grid%ny, location /= on_y_faces, derivative == 2, .false., &
+                      0, 0, iy, wy)
+    call axis_stencil(wrapped(point(3), grid%lz), grid%dz, grid%nz, location /= on_z_faces, derivative == 3, .true., &
+                      grid%z_offset, grid%nz_local, iz, wz)
+    total = 0
+    do c = 1, 3
+      if (wz(c) == 0.0_wp) cycle   ! an exact zero weight (unused third node): skip its loads
+      do b = 1, 3
+        if (wy(b) == 0.0_wp) cycle
+        do a = 1, 3
+          total = total + wx(a) * wy(b) * wz(c) * field(ix(a), iy(b), iz(c))
+        end do
+      end do
+    end do
+  end function stencil_sum
+
+  !> Nodes and weights along one direction for coordinate s in [0, n h). Node m (global, 1-based)
+  !> is at (m - 1/2) h for a centred direction, m h for a face direction. Value: the two nodes
+  !> around s, linear weights. Derivative: the differences D_m = (f_{m+1} - f_m) / h sit half-way,
+  !> the two around s are combined linearly, giving three nodes. Periodic directions wrap the
+  !> index into 1..n; the slab direction (sliced) returns local indices 0..nz_local+1 and moves the
+  !> derivative's nodes up into the slab where they would need a second halo plane (extrapolation).
+  subroutine axis_stencil(s, h, n, centred, derivative, sliced, offset, n_local, index, weight)
+    real(wp), intent(in) :: s, h
+    integer, intent(in) :: n, offset, n_local
+    logical, intent(in) :: centred, derivative, sliced
+    integer, intent(out) :: index(3)
+    real(wp), intent(out) :: weight(3)
+    real(wp) :: q, t
+    integer :: m0, j
+    q = s / h
+    if (centred) q = q + 0.5_wp
+    if (derivative) q = q - 0.5_wp
+    m0 = floor(q)
+    if (sliced .and. derivative) m0 = min(max(m0, offset), offset + n_local - 1)
+    t = q - m0
+    if (derivative) then
+      weight = [-(1.0_wp - t), 1.0_wp - 2.0_wp * t, t] / h
+    else
+      weight = [1.0_wp - t, t, 0.0_wp]
+    end if
+    do j = 1, 3
+      if (sliced) then
+        index(j) = m0 + j - 1 - offset
+      else
+        index(j) = modulo(m0 + j - 2, n) + 1
+      end if
+    end do
+    if (sliced) then
+      if (.not. derivative) index(3) = index(2)   ! weight 0: any valid index
+      if (index(1) < 0 .or. index(3) > n_local + 1) &
+          call fatal('field_interpolation: point outside the slab of this rank (use point_on_this_rank)')
+    end if
+  end subroutine axis_stencil
+end module field_interpolation
