@@ -1,7 +1,7 @@
 !> Reading and checking the whole deck, before anything is allocated.
 module config_reader
   use agglo_config, only: agglo_config_t, deck_group_names
-  use config_checks, only: check_cross_groups
+  use config_checks, only: check_cross_groups, check_every_value, check_scene_combinations
   use deck_file, only: deck_t, deck_load, deck_check_groups
   use config_run, only: read_run_group, check_run_group
   use config_grid, only: read_grid_group, check_grid_group
@@ -46,8 +46,10 @@ contains
     call read_collision_group(deck, cfg%collision)
     call read_output_group(deck, cfg%output)
 
+    call check_every_value(cfg)
     call check_run_group(cfg%run)
     call check_scene_group(cfg%scene)
+    call check_scene_combinations(cfg)
     call check_output_group(cfg%output)
     if (cfg%scene%fluid /= 'none') call check_fluid_group(cfg%fluid)
     if (cfg%scene%fluid == 'resolved') call check_grid_group(cfg%grid)
