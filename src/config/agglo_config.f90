@@ -25,7 +25,7 @@ module agglo_config
     type(pair_config_t) :: pair
     type(dlvo_config_t) :: dlvo
     type(collision_config_t) :: collision
-    character(len=256) :: deck_path = ''     !< the deck file this configuration came from
+    character(len=4096) :: deck_path = ''    !< the deck file this configuration came from (PATH_MAX)
   end type agglo_config_t
 
   !> Every namelist group a deck may contain.
