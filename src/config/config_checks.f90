@@ -42,7 +42,7 @@ contains
     end do
   end subroutine check_every_value
 
-  !> The text with runs of blanks shortened to one blank.
+  !> The text with runs of blanks shortened to one blank, none after a repeat count ("3*NaN").
   pure function squeeze(text) result(out)
     character(len=*), intent(in) :: text
     character(len=:), allocatable :: out
@@ -50,7 +50,7 @@ contains
     out = ''
     do i = 1, len_trim(text)
       if (text(i:i) == ' ' .and. i > 1) then
-        if (text(i - 1:i - 1) == ' ') cycle
+        if (text(i - 1:i - 1) == ' ' .or. text(i - 1:i - 1) == '*') cycle
       end if
       out = out//text(i:i)
     end do

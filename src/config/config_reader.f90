@@ -116,10 +116,10 @@ contains
     single%path = '--set '//override
     allocate(character(len=len(group) + len(assignment) + 4) :: single%lines(1))
     single%lines(1) = '&'//group//' '//assignment//' /'
+    call deck_check_groups(single, deck_group_names)
     call deck_group_close(single, group, line_number, column)
     if (column /= len_trim(single%lines(1))) call fatal('--set '''//override//''': the value ends the group '// &
         '(a "/" outside quotes); one variable per --set')
-    call deck_check_groups(single, deck_group_names)
     call read_groups(single, scratch)
 
     ! The merged text: a copy of the lines, then the deck's lines re-allocated to hold it.
