@@ -116,11 +116,11 @@ contains
     if (item_is_text(item) .and. n >= 3) item_text_fills = (item%value(n - 1:n - 1) /= ' ')
   end function item_text_fills
 
-  !> The values of a non-character item, one per element ("r*v" repeat counts expanded to v once).
+  !> The values of a non-character item, one per element ("r*v" repeat counts expanded to r copies).
   function item_tokens(item) result(tokens)
     type(namelist_item_t), intent(in) :: item
     character(len=64), allocatable :: tokens(:)
-    integer :: start, i, star
+    integer :: start, i, star, repeats, ios, r
     character(len=:), allocatable :: text, token
     allocate(tokens(0))
     text = item%value//','
@@ -128,9 +128,18 @@ contains
     do i = 1, len(text)
       if (text(i:i) /= ',') cycle
       token = trim(adjustl(text(start:i - 1)))
+      repeats = 1
       star = index(token, '*')
-      if (star > 0) token = token(star + 1:)
-      if (len(token) > 0) tokens = [character(len=64) :: tokens, token]
+      if (star > 0) then
+        read(token(1:star - 1), *, iostat=ios) repeats
+        if (ios /= 0) repeats = 1
+        token = trim(adjustl(token(star + 1:)))
+      end if
+      if (len(token) > 0) then
+        do r = 1, max(repeats, 1)
+          tokens = [character(len=64) :: tokens, token]
+        end do
+      end if
       start = i + 1
     end do
   end function item_tokens
