@@ -91,15 +91,16 @@ contains
   !>  - every "&name" is a known group, appears once and is closed by "/" before the next opens;
   !>  - no text outside the groups except "!" comments (a stray "nx = 8" after a "/" is lost);
   !>  - every string closes on the line it opens (an open quote swallows the rest of the group);
+  !>  - every "name =" has a value (an empty one, a namelist null value, keeps the default);
   !>  - no "$name ... $end" groups (another dialect, outside these checks);
   !>  - at least one group (an empty file, plain text or JSON is not a deck).
   subroutine deck_check_groups(deck, known)
     type(deck_t), intent(in) :: deck
     character(len=*), intent(in) :: known(:)
     character(len=64) :: seen(100), name
-    integer :: nseen, i, k, col, open_line
+    integer :: nseen, i, k, col, open_line, pending(2)
     logical :: inside
-    character(len=1) :: c, quote
+    character(len=1) :: c, quote, previous
     character(len=:), allocatable :: allowed
     allowed = ''
     do k = 1, size(known)
@@ -109,11 +110,15 @@ contains
     inside = .false.
     open_line = 0
     k = 0
+    pending = 0
+    previous = ' '
     do i = 1, size(deck%lines)
       quote = ' '
       col = 1
       do while (col <= len_trim(deck%lines(i)))
         c = deck%lines(i)(col:col)
+        if (quote == ' ' .and. inside .and. c /= '!' .and. .not. is_blank(c)) &
+            call track_values(deck, i, col, pending, previous)
         if (quote /= ' ') then
           if (c == quote) quote = ' '
         else if (c == '!') then
@@ -142,6 +147,7 @@ contains
           seen(nseen) = name
           inside = .true.
           open_line = i
+          previous = ' '
           col = col + len_trim(name)
         else if (c == '/') then
           if (.not. inside) call outside_text(deck, i, col)
@@ -160,6 +166,67 @@ contains
     if (nseen == 0) call fatal('deck: '//deck%path//' holds no namelist group (&name ... /): not an '// &
         'Agglo deck; see docs/decks.md and input/*.nml')
   end subroutine deck_check_groups
+
+  !> Called for each significant character inside a group (outside strings and comments): an "="
+  !> must be followed by a value, not by ",", "/", "&" or the next "name =" (a namelist null value
+  !> leaves the variable as it was, the default, without a word), and a list has no ",,".
+  subroutine track_values(deck, line_number, column, pending, previous)
+    type(deck_t), intent(in) :: deck
+    integer, intent(in) :: line_number, column
+    integer, intent(inout) :: pending(2)          !< line and column of an "=" waiting for its value
+    character(len=1), intent(inout) :: previous   !< the previous significant character in the group
+    character(len=1) :: c
+    c = deck%lines(line_number)(column:column)
+    if (pending(1) > 0) then
+      if (c == ',' .or. c == '/' .or. c == '&' .or. c == '=' .or. starts_assignment(deck%lines(line_number), column)) &
+          call fatal('deck: '//where(deck, pending(1))//': "'//trim(name_before(deck%lines(pending(1)), pending(2)))// &
+          ' =" has no value (an empty value would keep the default without a word; give a value or '// &
+          'leave the variable out)')
+      pending = 0
+    end if
+    if (c == ',' .and. previous == ',') call fatal('deck: '//where(deck, line_number)//': an empty value ",," in '// &
+        'a list (it would keep that element''s default without a word)')
+    if (c == '=') pending = [line_number, column]
+    previous = c
+  end subroutine track_values
+
+  !> The text at column starts "name =" or "name(" (the next assignment, not a value).
+  pure logical function starts_assignment(line, column)
+    character(len=*), intent(in) :: line
+    integer, intent(in) :: column
+    integer :: j
+    starts_assignment = .false.
+    if (scan(line(column:column), 'abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ') == 0) return
+    j = column
+    do while (j <= len_trim(line))
+      if (scan(line(j:j), name_characters) == 0) exit
+      j = j + 1
+    end do
+    do while (j <= len_trim(line))
+      if (.not. is_blank(line(j:j))) exit
+      j = j + 1
+    end do
+    if (j <= len_trim(line)) starts_assignment = (line(j:j) == '=' .or. line(j:j) == '(')
+  end function starts_assignment
+
+  !> The variable name (with its subscript) before the "=" at column.
+  pure function name_before(line, column) result(name)
+    character(len=*), intent(in) :: line
+    integer, intent(in) :: column
+    character(len=:), allocatable :: name
+    integer :: first, last
+    last = column - 1
+    do while (last > 0)
+      if (.not. is_blank(line(last:last))) exit
+      last = last - 1
+    end do
+    first = last
+    do while (first > 1)
+      if (scan(line(first - 1:first - 1), name_characters//'()') == 0) exit
+      first = first - 1
+    end do
+    name = trim(adjustl(line(max(first, 1):max(last, 0))))
+  end function name_before
 
   !> "line 7 of deck.nml"
   function where(deck, line_number) result(text)

@@ -40,6 +40,18 @@ expect_error json '{"run": {"name": "a", "dt": 1e-7}}' 'text outside a namelist 
 printf '\x7fELF\x02\x01\x01\x00\x00\xff\xfe&\x00/\n\x01\x02' > garbage.nml
 expect_deck_file_error binary_garbage 1 garbage.nml 'text outside a namelist group: "?ELF'
 
+# An empty value (a namelist null value) kept the default without a word.
+expect_error empty_value "$pair
+&pair gap = , radius = 40.0e-6 /" 'line 3 of empty_value.nml: "gap =" has no value'
+expect_error empty_value_before_next_line "&run name = 'p', end_time = 1.0e-6,
+  dt =
+  seed = 4 /
+&scene fluid = 'none', particles = 'pair' /" 'line 2 of empty_value_before_next_line.nml: "dt =" has no value'
+expect_error empty_value_at_group_end "$pair
+&collision restitution = /" '"restitution =" has no value'
+expect_error empty_list_element "$pair
+&pair orientation = 'given', axis1 = 1.0,, 0.0 /" 'an empty value ",," in a list'
+
 # --- Values longer than their variable (a namelist read cuts them silently) ----------------------
 expect_error name_too_long "&run name = '$(repeat n 64)' /" '&run name' '(64 characters or more)' \
   'at most 63 characters'
