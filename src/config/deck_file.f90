@@ -117,6 +117,8 @@ contains
       col = 1
       do while (col <= len_trim(deck%lines(i)))
         c = deck%lines(i)(col:col)
+        if ((iachar(c) < 32 .or. iachar(c) == 127) .and. .not. is_blank(c)) call fatal('deck: '//where(deck, i)//': a control '// &
+            'character (code '//int_text(iachar(c))//') in column '//int_text(col)//'; a deck is plain text')
         if (quote == ' ' .and. inside .and. c /= '!' .and. .not. is_blank(c)) &
             call track_values(deck, i, col, pending, previous)
         if (quote /= ' ') then

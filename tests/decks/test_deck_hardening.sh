@@ -38,7 +38,7 @@ expect_deck_file_error comment_only 1 comment_only.nml 'holds no namelist group'
 expect_error plain_text "This is not a deck." 'text outside a namelist group: "This is not a deck."'
 expect_error json '{"run": {"name": "a", "dt": 1e-7}}' 'text outside a namelist group' 'line 1 of json.nml'
 printf '\x7fELF\x02\x01\x01\x00\x00\xff\xfe&\x00/\n\x01\x02' > garbage.nml
-expect_deck_file_error binary_garbage 1 garbage.nml 'text outside a namelist group: "?ELF'
+expect_deck_file_error binary_garbage 1 garbage.nml 'line 1 of garbage.nml: a control character (code 127) in column 1'
 
 # An empty value (a namelist null value) kept the default without a word.
 expect_error empty_value "$pair
@@ -51,6 +51,9 @@ expect_error empty_value_at_group_end "$pair
 &collision restitution = /" '"restitution =" has no value'
 expect_error empty_list_element "$pair
 &pair orientation = 'given', axis1 = 1.0,, 0.0 /" 'an empty value ",," in a list'
+
+printf "&run name = 'p', dt = 1.0e-7\x00 /\n&scene fluid = 'none', particles = 'pair' /\n" > control.nml
+expect_deck_file_error control_character 1 control.nml 'line 1 of control.nml: a control character (code 0)'
 
 # --- Values longer than their variable (a namelist read cuts them silently) ----------------------
 expect_error name_too_long "&run name = '$(repeat n 64)' /" '&run name' '(64 characters or more)' \
