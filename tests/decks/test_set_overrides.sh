@@ -4,6 +4,7 @@
 set -u
 AGGLO=${AGGLO:?AGGLO must point to the built executable}
 . "$(cd "$(dirname "$0")" && pwd)/deck_error_lib.sh"
+montecarlo="$(cd "$(dirname "$0")/../.." && pwd)/tools/montecarlo.sh"
 work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
 cd "$work"
 
@@ -42,3 +43,16 @@ extra_args=(--set run.dt=NaN); expect_deck_file_error set_not_finite 1 base.nml 
 extra_args=(--set); expect_deck_file_error set_without_argument 1 base.nml '--set needs group.variable=value'
 extra_args=(other.nml); expect_deck_file_error second_deck_refused 1 base.nml 'unknown argument "other.nml"'
 extra_args=()
+
+# tools/montecarlo.sh has no namelist parser of its own: its --set goes to the code, which refuses a
+# bad one by name and merges a good one into every run's deck.
+"$montecarlo" --deck base.nml --runs 2 --seed 9 --out "mc bad" --agglo "$AGGLO" --slurm --set run.dtt=1 > mc_bad.out 2>&1
+status=$?
+if [ $status -eq 2 ] && grep -q 'refused by the code: agglo: error: .*--set run.dtt=1.*dtt' mc_bad.out && [ ! -e "mc bad/batch.nml" ]; then
+  echo "PASS montecarlo_set_refused_by_the_code"
+else echo "FAIL montecarlo_set_refused_by_the_code: status $status, $(head -c 300 mc_bad.out)"; fi
+"$montecarlo" --deck base.nml --runs 2 --seed 9 --out "mc good" --agglo "$AGGLO" --slurm --set run.dt=2.0e-8 > mc_good.out 2>&1
+if "$AGGLO" "mc good/run_0002/deck.nml" --print-deck > run2.nml 2>&1 && grep -q '^  dt = 2.0e-8$' run2.nml \
+   && grep -q "^  name = 'run_0002'$" run2.nml && grep -q '^  seed = 10$' run2.nml && grep -q '^  overwrite = .true.$' run2.nml; then
+  echo "PASS montecarlo_run_deck_merged_by_the_code"
+else echo "FAIL montecarlo_run_deck_merged_by_the_code: $(head -c 400 "mc good/run_0002/deck.nml" 2>&1) $(tail -n 2 mc_good.out)"; fi
