@@ -7,7 +7,7 @@ program agglo
   use, intrinsic :: iso_fortran_env, only: output_unit
   use agglo_config, only: agglo_config_t
   use config_reader, only: read_config
-  use deck_file, only: deck_t
+  use deck_file, only: deck_t, int_text
   use error_handling, only: fatal
   use logger, only: log_open, log_line, log_close, log_is_root
   use parallel_env, only: parallel_start, parallel_stop, n_ranks
@@ -85,7 +85,7 @@ contains
     end do
     if (len(deck_path) == 0) call fatal(usage)
     if (len(deck_path) > len(cfg%deck_path)) call fatal('the deck path is longer than '// &
-        'the '//trim(adjustl(int_string(len(cfg%deck_path))))//' characters allowed: '//deck_path(1:80)//'...')
+        'the '//int_text(len(cfg%deck_path))//' characters allowed: '//deck_path(1:80)//'...')
   end subroutine read_arguments
 
   subroutine add_override(text)
@@ -105,10 +105,4 @@ contains
     allocate(character(len=length) :: text)
     if (length > 0) call get_command_argument(k, text)
   end function argument_text
-
-  function int_string(value) result(text)
-    integer, intent(in) :: value
-    character(len=16) :: text
-    write(text, '(i0)') value
-  end function int_string
 end program agglo

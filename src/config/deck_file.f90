@@ -117,8 +117,9 @@ contains
       col = 1
       do while (col <= len_trim(deck%lines(i)))
         c = deck%lines(i)(col:col)
-        if ((iachar(c) < 32 .or. iachar(c) == 127) .and. .not. is_blank(c)) call fatal('deck: '//where(deck, i)//': a control '// &
-            'character (code '//int_text(iachar(c))//') in column '//int_text(col)//'; a deck is plain text')
+        if ((iachar(c) < 32 .or. iachar(c) == 127) .and. .not. is_blank(c)) call fatal('deck: '// &
+            line_of(deck, i)//': a control character (code '//int_text(iachar(c))//') in column '// &
+            int_text(col)//'; a deck is plain text')
         if (quote == ' ' .and. inside .and. c /= '!' .and. .not. is_blank(c)) &
             call track_values(deck, i, col, pending, previous)
         if (quote /= ' ') then
@@ -130,20 +131,20 @@ contains
           quote = c
           k = col
         else if (c == '$') then
-          call fatal('deck: '//where(deck, i)//': "$" groups ($name ... $end) are not supported; '// &
+          call fatal('deck: '//line_of(deck, i)//': "$" groups ($name ... $end) are not supported; '// &
               'write each group as &name ... / (docs/decks.md)')
         else if (c == '&') then
           name = lower(group_name_at(deck%lines(i), col))
-          if (inside) call fatal('deck: '//where(deck, i)//': "&'//trim(name)//'" inside namelist group &'// &
+          if (inside) call fatal('deck: '//line_of(deck, i)//': "&'//trim(name)//'" inside namelist group &'// &
               trim(seen(nseen))//' (opened on line '//int_text(open_line)//'), which is not closed by "/" '// &
               'before it; close every group with "/"')
-          if (len_trim(name) == 0) call fatal('deck: '//where(deck, i)//': "&" without a group name; '// &
+          if (len_trim(name) == 0) call fatal('deck: '//line_of(deck, i)//': "&" without a group name; '// &
               'known groups:'//allowed)
           if (.not. any(known == name)) call fatal('deck: unknown namelist group &'//trim(name)// &
-              ' ('//where(deck, i)//'); known groups:'//allowed)
+              ' ('//line_of(deck, i)//'); known groups:'//allowed)
           if (nseen > 0) then
             if (any(seen(1:nseen) == name)) call fatal('deck: namelist group &'//trim(name)// &
-                ' appears more than once ('//where(deck, i)//')')
+                ' appears more than once ('//line_of(deck, i)//')')
           end if
           nseen = min(nseen + 1, size(seen))
           seen(nseen) = name
@@ -159,7 +160,7 @@ contains
         end if
         col = col + 1
       end do
-      if (quote /= ' ') call fatal('deck: '//where(deck, i)//': the string opened by '//quote//' in column '// &
+      if (quote /= ' ') call fatal('deck: '//line_of(deck, i)//': the string opened by '//quote//' in column '// &
           int_text(k)//' is not closed on its line (a missing quote? strings must close on the line '// &
           'they open)')
     end do
@@ -181,12 +182,12 @@ contains
     c = deck%lines(line_number)(column:column)
     if (pending(1) > 0) then
       if (c == ',' .or. c == '/' .or. c == '&' .or. c == '=' .or. starts_assignment(deck%lines(line_number), column)) &
-          call fatal('deck: '//where(deck, pending(1))//': "'//trim(name_before(deck%lines(pending(1)), pending(2)))// &
+          call fatal('deck: '//line_of(deck, pending(1))//': "'//trim(name_before(deck%lines(pending(1)), pending(2)))// &
           ' =" has no value (an empty value would keep the default without a word; give a value or '// &
           'leave the variable out)')
       pending = 0
     end if
-    if (c == ',' .and. previous == ',') call fatal('deck: '//where(deck, line_number)//': an empty value ",," in '// &
+    if (c == ',' .and. previous == ',') call fatal('deck: '//line_of(deck, line_number)//': an empty value ",," in '// &
         'a list (it would keep that element''s default without a word)')
     if (c == '=') pending = [line_number, column]
     previous = c
@@ -231,17 +232,17 @@ contains
   end function name_before
 
   !> "line 7 of deck.nml"
-  function where(deck, line_number) result(text)
+  function line_of(deck, line_number) result(text)
     type(deck_t), intent(in) :: deck
     integer, intent(in) :: line_number
     character(len=:), allocatable :: text
     text = 'line '//int_text(line_number)//' of '//deck%path
-  end function where
+  end function line_of
 
   subroutine outside_text(deck, line_number, column)
     type(deck_t), intent(in) :: deck
     integer, intent(in) :: line_number, column
-    call fatal('deck: '//where(deck, line_number)//': text outside a namelist group: "'// &
+    call fatal('deck: '//line_of(deck, line_number)//': text outside a namelist group: "'// &
         printable(deck%lines(line_number)(column:min(column + 39, len_trim(deck%lines(line_number)))))// &
         '" (values go inside &group ... /; comments start with "!")')
   end subroutine outside_text
