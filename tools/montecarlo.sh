@@ -3,7 +3,7 @@
 # job array. Resumable; a failed run is recorded and the batch carries on. `--help` says how.
 # Needs bash >= 5.1 (wait -n -p) and coreutils only.
 set -uo pipefail
-export LC_ALL=C   # byte lengths and plain ASCII case mapping in the deck parser
+export LC_ALL=C   # byte lengths and plain ASCII case mapping
 
 script_name=${0##*/}
 script_dir=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd -P)
@@ -15,8 +15,9 @@ Usage: $script_name --deck FILE --runs N --seed S --out ROOT [options]
 Runs N copies of the base deck FILE that differ only in &run seed (S, S+1, ..., S+N-1) and name.
 Run i (1-based) lives in ROOT/run_NNNN (NNNN = i with 4 digits) with its own deck ROOT/run_NNNN/deck.nml:
 the base deck with &run name = 'run_NNNN', seed, overwrite = .true., restart = .false. and
-&output directory = ROOT/run_NNNN written into the deck's own &run and &output groups (added if the
-deck has none). The code draws the particles' orientations and positions from the seed.
+&output directory = ROOT/run_NNNN merged into the deck's own &run and &output groups (added if the
+deck has none) by the code itself (agglo DECK --set ... --print-deck), which checks every deck as
+it would a run's. The code draws the particles' orientations and positions from the seed.
 
 Required:
   -d, --deck FILE        base deck (namelist file, e.g. input/<case>.nml)
@@ -29,7 +30,7 @@ Options:
   -n, --ranks R          MPI ranks per run (default 1; R > 1 starts each run with the launcher)
       --set G.V=VALUE    set variable V of group &G in every run, VALUE as written in a deck
                          (e.g. --set run.end_time=2e-3 --set "scene.fluid='stokes'"); repeatable;
-                         part of the batch's base deck
+                         part of the batch's base deck; passed to the code's own --set
       --agglo PATH       the executable (default: \$AGGLO, else build/agglo of this repository)
       --launcher CMD     MPI launcher for R > 1, words split on blanks (default "mpirun";
                          with --slurm "srun"); called as CMD -n R AGGLO DECK
@@ -64,122 +65,9 @@ if (( BASH_VERSINFO[0] < 5 || (BASH_VERSINFO[0] == 5 && BASH_VERSINFO[1] < 1) ))
 fi
 
 # ---------------------------------------------------------------------------------------------
-# Deck rewriting. A namelist deck is text with groups "&name ... /"; inside a group, items are
-# "variable = value(s)" separated by blanks or commas; '!' starts a comment and quotes protect
-# strings (Fortran 2008, 10.11.3). deck_rewrite drops the assignments of every overridden variable
-# from its group and writes the new values just before the group's closing "/"; a group the deck
-# lacks is appended. Groups cannot be repeated (the code refuses a deck with a group twice).
-# Overrides: the global arrays override_keys ("group.variable", in order) and override_values.
-# The result is left in the global deck_out.
+# Decks: the code itself merges overrides into a deck and checks the result
+# (agglo DECK --set group.variable=value ... --print-deck), so there is one namelist parser.
 # ---------------------------------------------------------------------------------------------
-declare -a override_keys=() override_values=()
-
-override_index() { # group.variable -> its index in override_keys, or -1
-  local k
-  for k in "${!override_keys[@]}"; do
-    [[ ${override_keys[k]} == "$1" ]] && { printf '%s' "$k"; return; }
-  done
-  printf '%s' -1
-}
-
-add_override() { # group variable value (later calls replace earlier values)
-  local key="${1,,}.${2,,}" k
-  k=$(override_index "$key")
-  if (( k >= 0 )); then override_values[k]=$3; else override_keys+=("$key"); override_values+=("$3"); fi
-}
-
-group_assignments() { # group [lines] -> " v1 = x, v2 = y " or, with "lines", "  v1 = x\n  v2 = y\n"
-  local k text='' sep=' '
-  for k in "${!override_keys[@]}"; do
-    if [[ ${override_keys[k]%%.*} == "$1" ]]; then
-      if [[ ${2:-} == lines ]]; then
-        text+="  ${override_keys[k]#*.} = ${override_values[k]}"$'\n'
-      else
-        text+="$sep${override_keys[k]#*.} = ${override_values[k]}"; sep=', '
-      fi
-    fi
-  done
-  [[ -n $text && ${2:-} != lines ]] && text+=' '
-  printf '%s' "$text"
-}
-
-deck_rewrite() { # deck text
-  local s=$1 n=${#1} i=0 j c prev=$'\n' quote='' group='' ident group_start=0
-  local inside=0 comment=0 dropping=0 seen=' '
-  deck_out=''
-  while (( i < n )); do
-    c=${s:i:1}
-    if [[ -n $quote ]]; then                       # inside a quoted string
-      (( dropping )) || deck_out+=$c
-      [[ $c == "$quote" ]] && quote=''
-      prev=$c; i=$((i + 1)); continue
-    fi
-    if (( comment )); then                         # '!' comment up to the end of the line
-      [[ $c == $'\n' ]] && comment=0
-      (( dropping )) || deck_out+=$c
-      prev=$c; i=$((i + 1)); continue
-    fi
-    case $c in
-      \'|\")
-        quote=$c ;;
-      '!')
-        comment=1 ;;
-      '&')
-        if (( ! inside )); then                    # a group opens: "&name"
-          j=$((i + 1))
-          while (( j < n )) && [[ ${s:j:1} == [A-Za-z0-9_] ]]; do j=$((j + 1)); done
-          group=${s:i+1:j-i-1}; group=${group,,}
-          seen+="$group "; inside=1
-          deck_out+=${s:i:j-i}; group_start=${#deck_out}; prev=${s:j-1:1}; i=$j; continue
-        fi ;;
-      '/')
-        if (( inside )); then                      # the group closes: new values go first
-          if [[ -z $(group_assignments "$group") ]]; then
-            :
-          elif [[ ${deck_out:group_start} == *$'\n'* ]]; then   # a group over several lines:
-            while [[ ${deck_out: -1} == [[:blank:]] ]]; do deck_out=${deck_out%?}; done
-            [[ ${deck_out: -1} == $'\n' ]] || deck_out+=$'\n'
-            deck_out+=$(group_assignments "$group" lines)$'\n'   # one item a line
-          else
-            deck_out+=$(group_assignments "$group")
-          fi
-          deck_out+=/
-          inside=0; dropping=0; prev=$c; i=$((i + 1)); continue
-        fi ;;
-      [A-Za-z])
-        if (( inside )) && [[ $prev == [[:space:],\;] ]]; then
-          # Is this the start of an item "variable [(subscript)] ="?
-          j=$i
-          while (( j < n )) && [[ ${s:j:1} == [A-Za-z0-9_%] ]]; do j=$((j + 1)); done
-          ident=${s:i:j-i}
-          while (( j < n )) && [[ ${s:j:1} == [[:space:]] ]]; do j=$((j + 1)); done
-          if [[ ${s:j:1} == '(' ]]; then
-            while (( j < n )) && [[ ${s:j:1} != ')' ]]; do j=$((j + 1)); done
-            j=$((j + 1))
-            while (( j < n )) && [[ ${s:j:1} == [[:space:]] ]]; do j=$((j + 1)); done
-          fi
-          if [[ ${s:j:1} == '=' ]]; then
-            if (( $(override_index "$group.${ident,,}") >= 0 )); then dropping=1; else dropping=0; fi
-          fi
-          (( dropping )) || deck_out+=$ident
-          prev=${ident: -1}; i=$((i + ${#ident})); continue
-        fi ;;
-    esac
-    (( dropping )) || deck_out+=$c
-    prev=$c; i=$((i + 1))
-  done
-  (( inside )) && return 1                         # unclosed group: let the caller say so
-  local k g appended=' '
-  for k in "${!override_keys[@]}"; do              # groups the deck does not have
-    g=${override_keys[k]%%.*}
-    [[ $seen == *" $g "* || $appended == *" $g "* ]] && continue
-    [[ -n $deck_out && ${deck_out: -1} != $'\n' ]] && deck_out+=$'\n'
-    deck_out+="&$g$(group_assignments "$g")/"$'\n'
-    appended+="$g "
-  done
-  return 0
-}
-
 fortran_string() { # text -> a Fortran string literal ('' doubles a quote)
   local q="'"
   printf "'%s'" "${1//$q/$q$q}"
@@ -219,7 +107,7 @@ format_seconds() { # milliseconds -> "0.4s", "12s", "3m05s", "2h10m"
 # ---------------------------------------------------------------------------------------------
 deck='' runs='' base_seed='' root='' jobs=1 jobs_given=0 ranks=1 agglo=${AGGLO:-} launcher=''
 time_limit='' slurm=0 status_only=0
-declare -a sbatch_options=() user_sets=()
+declare -a sbatch_options=() user_sets=() set_arguments=()
 need_value() { [[ $# -ge 2 ]] || die "option $1 needs a value (see --help)"; }
 while [[ $# -gt 0 ]]; do
   case $1 in
@@ -255,11 +143,11 @@ fi
 for set_text in "${user_sets[@]}"; do
   [[ $set_text =~ ^([A-Za-z][A-Za-z0-9_]*)\.([A-Za-z][A-Za-z0-9_]*)=(.+)$ ]] || \
     die "--set '$set_text' is not allowed; allowed: GROUP.VARIABLE=VALUE, e.g. run.end_time=2e-3"
-  group=${BASH_REMATCH[1],,}; variable=${BASH_REMATCH[2],,}; value=${BASH_REMATCH[3]}
+  group=${BASH_REMATCH[1],,}; variable=${BASH_REMATCH[2],,}
   if [[ ($group == run && $variable =~ ^(name|seed|overwrite|restart)$) || ($group == output && $variable == directory) ]]; then
     die "--set $group.$variable is not allowed: the batch sets it for every run"
   fi
-  add_override "$group" "$variable" "$value"
+  set_arguments+=(--set "$set_text")
 done
 if [[ -z $launcher ]]; then
   if (( slurm )); then launcher=srun; else launcher=mpirun; fi
@@ -270,16 +158,23 @@ read -r -a launcher_words <<< "$launcher"
 # ---------------------------------------------------------------------------------------------
 # The batch root: its base deck and seed, and a lock against two calls working on it at once.
 # ---------------------------------------------------------------------------------------------
-deck_text=$(cat "$deck"; printf x) || die "cannot read the base deck '$deck'"
-deck_text=${deck_text%x}
-deck_rewrite "$deck_text" || die "base deck '$deck': the last namelist group is not closed by '/'"
-batch_deck_text=$deck_out
-
 if [[ -e $root && ! -d $root ]]; then die "output root '$root' exists and is not a directory"; fi
 if (( status_only )) && [[ ! -f $root/batch.conf ]]; then die "output root '$root' holds no batch (no batch.conf)"; fi
 if [[ -d $root && ! -f $root/batch.conf ]] && [[ -n $(ls -A "$root" 2>/dev/null) ]]; then
   die "output root '$root' is not empty and holds no batch (no batch.conf): choose a new or empty directory"
 fi
+
+if [[ -z $agglo ]]; then agglo="$script_dir/../build/agglo"; fi
+[[ -f $agglo && -x $agglo ]] || die "executable '$agglo' not found or not executable (build it with 'make build', or pass --agglo / set AGGLO)"
+agglo="$(cd "$(dirname "$agglo")" && pwd -P)/$(basename "$agglo")"
+
+# The batch's base deck: the deck with the --set values merged and checked by the code.
+refusal=$(mktemp) || die "cannot create a temporary file"
+batch_deck_text=$("$agglo" "$deck" "${set_arguments[@]}" --print-deck 2> "$refusal" < /dev/null)
+status=$?
+batch_deck_text+=$'\n'
+message=$(grep -m1 'error' "$refusal" || tail -n 1 "$refusal"); rm -f "$refusal"
+(( status == 0 )) || die "base deck '$deck' (with the --set values) is refused by the code: $message"
 mkdir -p "$root" || die "cannot create the output root '$root'"
 root=$(cd "$root" && pwd -P) || die "cannot enter the output root"
 
@@ -330,36 +225,26 @@ fi
 # ---------------------------------------------------------------------------------------------
 # Per-run decks: the batch deck with the run's identity (placeholders filled per run).
 # ---------------------------------------------------------------------------------------------
-override_keys=() override_values=()
-add_override run name @@MC_NAME@@
-add_override run seed @@MC_SEED@@
-add_override run overwrite .true.
-add_override run restart .false.
-add_override output directory @@MC_DIRECTORY@@
-deck_rewrite "$batch_deck_text" || die "internal error: the batch deck cannot be parsed"
-run_deck_template=$deck_out
-
 max_seed=$((base_seed + runs - 1))
 if (( max_seed > 2147483647 || base_seed < -2147483648 )); then
   say "warning: seeds $base_seed..$max_seed leave the 32-bit integer range; the code will refuse those runs"
 fi
 
-write_run_deck() { # run index -> run directory with deck.nml (incomplete runs only)
-  local i=$1 dir text
+write_run_deck() { # run index -> run directory with deck.nml (the code's own merge of the run's identity)
+  local i=$1 dir status
   dir="$root/$(run_name "$i")"
   mkdir -p "$dir" || return 1
-  text=${run_deck_template//@@MC_NAME@@/"'$(run_name "$i")'"}
-  text=${text//@@MC_SEED@@/"$((base_seed + i - 1))"}
-  text=${text//@@MC_DIRECTORY@@/"$(fortran_string "$dir")"}
-  printf '%s' "$text" > "$dir/deck.nml"
+  "$agglo" "$root/batch.nml" --set "run.name='$(run_name "$i")'" --set "run.seed=$((base_seed + i - 1))" \
+    --set run.overwrite=.true. --set run.restart=.false. --set "output.directory=$(fortran_string "$dir")" \
+    --print-deck > "$dir/deck.nml.tmp" 2> "$dir/stdout.log" < /dev/null
+  status=$?
+  if (( status != 0 )); then rm -f "$dir/deck.nml.tmp"; return "$status"; fi
+  mv -f "$dir/deck.nml.tmp" "$dir/deck.nml"
 }
 
-# &output directory is character(len=256) in the code; a longer value would be cut silently.
-(( ${#root} + 10 <= 256 )) || die "output root '$root' is too long (${#root} bytes): run directories must stay within the 256 characters of &output directory"
+# &output directory holds at most 255 characters in the code (a longer value is refused there).
+(( ${#root} + 9 <= 255 )) || die "output root '$root' is too long (${#root} bytes): run directories must stay within the 255 characters of &output directory"
 
-if [[ -z $agglo ]]; then agglo="$script_dir/../build/agglo"; fi
-[[ -f $agglo && -x $agglo ]] || die "executable '$agglo' not found or not executable (build it with 'make build', or pass --agglo / set AGGLO)"
-agglo="$(cd "$(dirname "$agglo")" && pwd -P)/$(basename "$agglo")"
 workdir=$(pwd -P)
 
 pending=()
@@ -383,7 +268,9 @@ if (( slurm )); then
     first=$i; last=$i
   done
   (( jobs_given )) && array+="%$jobs"
-  for i in "${pending[@]}"; do write_run_deck "$i" || die "cannot write the deck of $(run_name "$i")"; done
+  for i in "${pending[@]}"; do
+    write_run_deck "$i" || die "cannot write the deck of $(run_name "$i"): $(tail -n 1 "$root/$(run_name "$i")/stdout.log" 2>/dev/null)"
+  done
   script="$root/montecarlo.sbatch"
   {
     printf '#!/bin/bash\n'
@@ -434,13 +321,17 @@ done_ok=0 done_failed=0 next=0 busy_ms=0 batch_start=$(now_ms)
 failed_runs=()
 
 start_run() { # run index
-  local i=$1 dir
+  local i=$1 dir status
   dir="$root/$(run_name "$i")"
   rm -f "$dir/FAILED" "$dir/summary.json" "$dir/summary.json.rejected"
-  if ! write_run_deck "$i"; then
+  write_run_deck "$i"; status=$?
+  if (( status != 0 )); then             # the code refused the run's deck: the run failed
     mkdir -p "$dir" 2>/dev/null
-    printf 'reason: montecarlo could not write %s\n' "$dir/deck.nml" > "$dir/FAILED" 2>/dev/null
-    failed_runs+=("$i"); done_failed=$((done_failed + 1)); return
+    record_run_result "$dir" "$status"
+    failed_runs+=("$i"); done_failed=$((done_failed + 1))
+    progress "$(run_name "$i") FAILED ($(sed -n 's/^reason: //p' "$dir/FAILED" 2>/dev/null)); log: $dir/stdout.log"
+    tail -n 3 "$dir/stdout.log" 2>/dev/null | sed 's/^/    /'
+    return
   fi
   "${run_command[@]}" "$dir/deck.nml" > "$dir/stdout.log" 2>&1 < /dev/null &
   running_run[$!]=$i

@@ -9,9 +9,11 @@ module agglo_config
   use config_pair, only: pair_config_t, write_pair_group
   use config_dlvo, only: dlvo_config_t, write_dlvo_group
   use config_collision, only: collision_config_t, write_collision_group
+  use namelist_text, only: namelist_item_t, read_namelist_items
+  use error_handling, only: fatal
   implicit none
   private
-  public :: agglo_config_t, deck_group_names, write_config
+  public :: agglo_config_t, deck_group_names, write_config, config_items
 
   type :: agglo_config_t
     type(run_config_t) :: run
@@ -23,7 +25,7 @@ module agglo_config
     type(pair_config_t) :: pair
     type(dlvo_config_t) :: dlvo
     type(collision_config_t) :: collision
-    character(len=256) :: deck_path = ''     !< the deck file this configuration came from
+    character(len=4096) :: deck_path = ''    !< the deck file this configuration came from (PATH_MAX)
   end type agglo_config_t
 
   !> Every namelist group a deck may contain.
@@ -46,4 +48,18 @@ contains
     call write_collision_group(unit, cfg%collision)
     call write_output_group(unit, cfg%output)
   end subroutine write_config
+
+  !> Every variable of the configuration as (group, name, value text), through its own namelist
+  !> output (a scratch file: a namelist WRITE needs a unit).
+  function config_items(cfg) result(items)
+    type(agglo_config_t), intent(in) :: cfg
+    type(namelist_item_t), allocatable :: items(:)
+    integer :: unit, ios
+    open(newunit=unit, status='scratch', action='readwrite', form='formatted', delim='apostrophe', iostat=ios)
+    if (ios /= 0) call fatal('deck: cannot open a scratch file to check the configuration (TMPDIR not writable?)', &
+                             collective=.false.)
+    call write_config(unit, cfg)
+    call read_namelist_items(unit, items)
+    close(unit)
+  end function config_items
 end module agglo_config

@@ -2,27 +2,69 @@
 !> One subroutine per part of the code (fluid, forcing, particles), so each part keeps its rules together.
 module config_checks
   use agglo_kinds, only: wp
-  use agglo_config, only: agglo_config_t
+  use agglo_config, only: agglo_config_t, config_items
+  use namelist_text, only: namelist_item_t, item_is_text, item_text_fills, item_is_finite
   use deck_file, only: int_text, real_text
   use config_forcing, only: forcing_mode_extent
   use error_handling, only: input_error, fatal
   implicit none
   private
-  public :: check_cross_groups
+  public :: check_cross_groups, check_every_value, check_scene_combinations
 
 contains
 
   subroutine check_cross_groups(cfg, nranks)
     type(agglo_config_t), intent(in) :: cfg
     integer, intent(in) :: nranks
-    call check_scene_combinations(cfg)
     if (cfg%scene%fluid == 'resolved') call check_fluid_cross(cfg, nranks)
     if (cfg%scene%forcing /= 'none') call check_forcing_cross(cfg)
     if (cfg%scene%particles /= 'none') call check_particle_cross(cfg)
   end subroutine check_cross_groups
 
+  !> Every variable of every group, whether the scene uses it or not, through the configuration's own
+  !> namelist output (so no variable can be left out): each number finite (a NaN passes every
+  !> "> 0" test written as .not. (x > 0) but not every other, and +Inf passes "> 0"), each text
+  !> shorter than its variable (a namelist read cuts a longer value without a word).
+  subroutine check_every_value(cfg)
+    type(agglo_config_t), intent(in) :: cfg
+    type(namelist_item_t), allocatable :: items(:)
+    integer :: k, n
+    items = config_items(cfg)
+    do k = 1, size(items)
+      if (item_text_fills(items(k))) then
+        n = len(items(k)%value) - 2
+        call input_error(items(k)%group, items(k)%name, items(k)%value(1:min(n + 1, 41))// &
+            merge('...''', '    ', n > 40)//' ('//int_text(n)//' characters or more)', &
+            'at most '//int_text(n - 1)//' characters')
+      end if
+      if (.not. item_is_finite(items(k))) call input_error(items(k)%group, items(k)%name, &
+          squeeze(items(k)%value), 'finite numbers (no NaN or Infinity)')
+    end do
+  end subroutine check_every_value
+
+  !> The text with runs of blanks shortened to one blank, none after a repeat count ("3*NaN").
+  pure function squeeze(text) result(out)
+    character(len=*), intent(in) :: text
+    character(len=:), allocatable :: out
+    integer :: i
+    out = ''
+    do i = 1, len_trim(text)
+      if (text(i:i) == ' ' .and. i > 1) then
+        if (text(i - 1:i - 1) == ' ' .or. text(i - 1:i - 1) == '*') cycle
+      end if
+      out = out//text(i:i)
+    end do
+    out = trim(adjustl(out))
+  end function squeeze
+
+  !> What the scene switches on must fit together; checked before the groups' own values, so the
+  !> first message names the real conflict (e.g. forcing in a pair deck), not a consequence of it.
   subroutine check_scene_combinations(cfg)
     type(agglo_config_t), intent(in) :: cfg
+    if (cfg%scene%forcing /= 'none' .and. cfg%scene%fluid /= 'resolved') call input_error('scene', 'forcing', &
+        ''''//trim(cfg%scene%forcing)//''' with fluid = '''//trim(cfg%scene%fluid)//'''', '''none'' unless '// &
+        'fluid = ''resolved'' (the forcing drives the resolved fluid; a fluid-free or Stokes scene has no '// &
+        'velocity field)')
     if (cfg%scene%fluid == 'resolved' .and. cfg%scene%particles /= 'none') call fatal( &
         'deck: &scene fluid = ''resolved'' with particles = '''//trim(cfg%scene%particles)// &
         ''' needs the immersed-boundary coupling, which this version does not have yet; '// &
@@ -50,7 +92,23 @@ contains
     if (mod(cfg%grid%ny, nranks) /= 0) call input_error('grid', 'ny', int_text(cfg%grid%ny), &
         'a multiple of the number of MPI ranks ('//int_text(nranks)//')')
     call check_fluid_time_step(cfg)
+    if (cfg%fluid%init == 'random') call check_random_peak(cfg)
   end subroutine check_fluid_cross
+
+  !> The random field's spectral peak k_p = init_peak_wavenumber 2 pi / length_x must be resolved:
+  !> at most the smallest Nyquist wavenumber pi n_d / L_d of the grid, i.e.
+  !> init_peak_wavenumber <= min_d n_d length_x / (2 L_d). Above it the spectrum is cut before its
+  !> peak and the field is not the one the deck describes.
+  subroutine check_random_peak(cfg)
+    type(agglo_config_t), intent(in) :: cfg
+    real(wp) :: nyquist
+    nyquist = min(cfg%grid%nx * cfg%grid%length_x / (2.0_wp * cfg%grid%length_x), &
+                  cfg%grid%ny * cfg%grid%length_x / (2.0_wp * cfg%grid%length_y), &
+                  cfg%grid%nz * cfg%grid%length_x / (2.0_wp * cfg%grid%length_z))
+    if (.not. (cfg%fluid%init_peak_wavenumber <= nyquist)) call input_error('fluid', 'init_peak_wavenumber', &
+        real_text(cfg%fluid%init_peak_wavenumber), '<= '//real_text(nyquist)//', the grid''s smallest Nyquist '// &
+        'wavenumber min(n_d length_x / (2 L_d)) in units of 2 pi / length_x (refine &grid or lower the peak)')
+  end subroutine check_random_peak
 
   !> A fixed dt must be below the stability limits the initial field lets us estimate:
   !>  - explicit diffusion (AB2, 7-point Laplacian): dt <= 1 / (4 nu (1/dx^2 + 1/dy^2 + 1/dz^2))
@@ -93,9 +151,6 @@ contains
     integer :: extent(3), cells(3), d
     real(wp) :: lengths(3)
     character(len=1), parameter :: axis(3) = ['x', 'y', 'z']
-    if (cfg%scene%fluid /= 'resolved') call input_error('scene', 'forcing', ''''//trim(cfg%scene%forcing)// &
-        ''' with fluid = '''//trim(cfg%scene%fluid)//'''', '''none'' unless fluid = ''resolved'' '// &
-        '(the forcing drives the resolved fluid; a fluid-free or Stokes scene has no velocity field)')
     lengths = [cfg%grid%length_x, cfg%grid%length_y, cfg%grid%length_z]
     cells = [cfg%grid%nx, cfg%grid%ny, cfg%grid%nz]
     extent = forcing_mode_extent(cfg%forcing%kappa_f_ratio, lengths)
@@ -114,6 +169,7 @@ contains
   !> collision models are surface-gap models in the Derjaguin limit, h << r).
   subroutine check_particle_cross(cfg)
     type(agglo_config_t), intent(in) :: cfg
+    real(wp) :: detect
     if (cfg%scene%dlvo) then
       if (.not. (cfg%dlvo%vdw_cutoff < 0.01_wp * cfg%pair%radius)) call input_error('dlvo', 'vdw_cutoff', &
           real_text(cfg%dlvo%vdw_cutoff), '< 0.01 * &pair radius = '//real_text(0.01_wp * cfg%pair%radius)//' m')
@@ -122,6 +178,12 @@ contains
       if (.not. (cfg%collision%detection_floor < 0.01_wp * cfg%pair%radius)) call input_error('collision', &
           'detection_floor', real_text(cfg%collision%detection_floor), &
           '< 0.01 * &pair radius = '//real_text(0.01_wp * cfg%pair%radius)//' m')
+      ! A start inside the detection distance max(floor, factor v_n dt) (collision.f90; v_n = the
+      ! approach speed at the start) is a collision at the first step, whose outcome depends on dt.
+      detect = max(cfg%collision%detection_floor, cfg%collision%detection_factor * cfg%pair%relative_speed * cfg%run%dt)
+      if (.not. (cfg%pair%gap > detect)) call input_error('pair', 'gap', real_text(cfg%pair%gap), '> '// &
+          real_text(detect)//' m, the collision detection distance at the start, max(&collision '// &
+          'detection_floor, detection_factor * relative_speed * &run dt)')
     end if
   end subroutine check_particle_cross
 end module config_checks

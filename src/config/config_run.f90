@@ -2,7 +2,7 @@
 module config_run
   use agglo_kinds, only: wp
   use deck_file, only: deck_t, check_namelist_read, require_positive, require_positive_int, &
-                       require_option, require_range
+                       require_option, require_range, real_text
   use error_handling, only: input_error
   implicit none
   private
@@ -69,7 +69,8 @@ contains
     call require_option('run', 'dt_mode', cfg%dt_mode, [character(len=8) :: 'fixed', 'cfl'])
     call require_range('run', 'cfl_target', cfg%cfl_target, 1.0e-3_wp, 1.0_wp)
     call require_range('run', 'cfl_limit', cfg%cfl_limit, 1.0e-3_wp, 2.0_wp)
-    if (cfg%cfl_target > cfg%cfl_limit) call input_error('run', 'cfl_target', 'above cfl_limit', '<= cfl_limit')
+    if (cfg%cfl_target > cfg%cfl_limit) call input_error('run', 'cfl_target', real_text(cfg%cfl_target), &
+        '<= cfl_limit = '//real_text(cfg%cfl_limit))
     call require_positive_int('run', 'progress_interval', cfg%progress_interval)
   end subroutine check_run_group
 

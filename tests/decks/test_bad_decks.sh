@@ -62,7 +62,7 @@ expect_error pair_unknown_shape 1 "$pair
 expect_error pair_aspect_ratio_zero 1 "$pair
 &pair shape = 'spheroid', aspect_ratio = 0.0 /" '&pair aspect_ratio' '> 0'
 expect_error pair_needle_aspect_below_one 1 "$pair
-&pair shape = 'needle', aspect_ratio = 0.5 /" '&pair aspect_ratio' "> 1 for shape = 'needle'"
+&pair shape = 'needle', aspect_ratio = 0.5 /" '&pair aspect_ratio' "> 1 and <= 2.00000E+01 for shape = 'needle'"
 expect_error pair_negative_speed 1 "$pair
 &pair relative_speed = -1.0e-3 /" '&pair relative_speed' '>= 0'
 expect_error pair_zero_axis 1 "$pair
