@@ -29,7 +29,7 @@ module field_output
   use error_handling, only: fatal
   use file_system, only: rename_file, remove_path
   use parallel_env, only: is_root, barrier
-  use run_directory, only: run_directory_path, run_file, forget_run_file
+  use run_directory, only: run_directory_path, run_file, record_run_file, forget_run_file
   use logger, only: log_line
   use directory_listing, only: list_directory, name_length
   use hdf5_io, only: h5_file_t, h5_create, h5_open, h5_close, h5_write_slab, h5_write_array, h5_read_array, &
@@ -147,7 +147,6 @@ contains
   !> Finish a snapshot (collective): metadata, close, rename complete, rebuild fields.xdmf.
   subroutine field_snapshot_end(snapshot)
     type(field_snapshot_t), intent(inout) :: snapshot
-    character(len=:), allocatable :: path
     call h5_write_array(snapshot%file, 'time', snapshot%time)
     call h5_write_array(snapshot%file, 'step', snapshot%step)
     call h5_write_array(snapshot%file, 'grid/shape', snapshot%global_shape)
@@ -157,7 +156,7 @@ contains
     call h5_write_string(snapshot%file, 'field_locations', snapshot%locations)
     call h5_close(snapshot%file)   ! renames the .tmp file once every rank has written
     if (is_root()) then
-      if (snapshot%directory == run_directory_path()) path = run_file(xdmf_name)   ! recorded in the manifest
+      if (snapshot%directory == run_directory_path()) call record_run_file(xdmf_name)
       call write_xdmf(snapshot%directory, snapshot%step)
     end if
     call barrier()

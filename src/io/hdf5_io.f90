@@ -27,7 +27,7 @@ module hdf5_io
   use hdf5, only: hid_t, hsize_t, size_t, h5open_f, h5close_f, h5kind_to_type, H5_REAL_KIND, H5_INTEGER_KIND, &
                   h5pcreate_f, h5pclose_f, h5pset_fapl_mpio_f, h5pset_dxpl_mpio_f, h5pset_chunk_f, &
                   h5pset_fletcher32_f, h5eset_auto_f, h5gn_members_f, h5gget_obj_info_idx_f, H5G_GROUP_F, &
-                  H5G_DATASET_F, &
+                  H5G_DATASET_F, h5pset_fill_time_f, H5D_FILL_TIME_NEVER_F, &
                   H5P_FILE_ACCESS_F, H5P_DATASET_XFER_F, H5P_DATASET_CREATE_F, &
                   H5FD_MPIO_COLLECTIVE_F, h5fcreate_f, h5fopen_f, h5fclose_f, h5fflush_f, &
                   H5F_ACC_TRUNC_F, H5F_ACC_RDWR_F, H5F_ACC_RDONLY_F, H5F_SCOPE_GLOBAL_F, &
@@ -378,6 +378,10 @@ contains
       if (file%checksums) then
         call h5pset_fletcher32_f(properties, status)
         call require_ok(status, 'setting the Fletcher-32 filter', file, name)
+        ! Every value is written: no fill values first (a parallel file allocates chunks at creation
+        ! and would otherwise write each chunk twice).
+        call h5pset_fill_time_f(properties, H5D_FILL_TIME_NEVER_F, status)
+        call require_ok(status, 'setting the fill time', file, name)
       end if
       call h5dcreate_f(file%id, name, type_id, space, dataset, status, dcpl_id=properties)
       call h5pclose_f(properties, status)

@@ -22,7 +22,7 @@ module run_directory
   use hdf5_io, only: longest_parallel_path
   implicit none
   private
-  public :: prepare_run_directory, run_directory_path, run_file, confirm_run_deck, forget_run_file, &
+  public :: prepare_run_directory, run_directory_path, run_file, record_run_file, confirm_run_deck, forget_run_file, &
             manifest_name, checkpoint_subdirectory
 
   character(len=*), parameter :: manifest_name = 'agglo_manifest.txt'
@@ -52,6 +52,12 @@ contains
     path = run_directory_path()//'/'//trim(name)
     if (allocated(directory) .and. is_root()) call record(trim(name))
   end function run_file
+
+  !> Record name (relative to the run directory) in the manifest, before the file is written (rank 0).
+  subroutine record_run_file(name)
+    character(len=*), intent(in) :: name
+    if (allocated(directory) .and. is_root()) call record(trim(name))
+  end subroutine record_run_file
 
   !> Remove name from the manifest (rank 0; the caller has deleted the file).
   subroutine forget_run_file(name)
