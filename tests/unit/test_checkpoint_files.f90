@@ -121,6 +121,7 @@ program test_checkpoint_files
   call checkpoint_begin(checkpoint, 7)
   call checkpoint_commit(checkpoint, 5)
   call check(file_exists(checkpoint_path(7_i8)), 'default_integer_step_interface')
+  call barrier()   ! every rank has looked before rank 0 renames it
   if (is_root()) call rename_file(checkpoint_path(7_i8), checkpoint_path(8_i8), renamed)
   call barrier()
   if (is_root()) call checkpoint_is_valid(checkpoint_path(8_i8), 8_i8, ok, reason)
