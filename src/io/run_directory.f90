@@ -119,9 +119,10 @@ contains
         pending_deck = cfg
       else
         if (has_run) call remove_earlier_run()
-        call write_manifest()
-        call write_run_deck(cfg)
+        call record('run.nml')
       end if
+      call record('agglo.log')   ! opened next, by every run (the manifest is complete before it)
+      if (.not. cfg%run%restart) call write_run_deck(cfg)
     end if
     call barrier()
   end subroutine prepare_run_directory
