@@ -28,6 +28,7 @@ module hdf5_io
                   h5pcreate_f, h5pclose_f, h5pset_fapl_mpio_f, h5pset_dxpl_mpio_f, h5pset_chunk_f, &
                   h5pset_fletcher32_f, h5eset_auto_f, h5gn_members_f, h5gget_obj_info_idx_f, H5G_GROUP_F, &
                   H5G_DATASET_F, h5pset_fill_time_f, H5D_FILL_TIME_NEVER_F, &
+                  h5pset_libver_bounds_f, H5F_LIBVER_V18_F, H5F_LIBVER_LATEST_F, &
                   H5P_FILE_ACCESS_F, H5P_DATASET_XFER_F, H5P_DATASET_CREATE_F, &
                   H5FD_MPIO_COLLECTIVE_F, h5fcreate_f, h5fopen_f, h5fclose_f, h5fflush_f, &
                   H5F_ACC_TRUNC_F, H5F_ACC_RDWR_F, H5F_ACC_RDONLY_F, H5F_SCOPE_GLOBAL_F, &
@@ -166,6 +167,12 @@ contains
     if (present(checksums)) file%checksums = checksums
     call require_path_length(file)
     call make_property_lists(file, access)
+    if (file%checksums) then
+      ! The 1.8 file format and later checksum the file's metadata too (superblock v2, object
+      ! headers v2, B-tree v2 nodes), so a damaged header is caught like damaged data.
+      call h5pset_libver_bounds_f(access, H5F_LIBVER_V18_F, H5F_LIBVER_LATEST_F, status)
+      call require_ok(status, 'h5pset_libver_bounds', file)
+    end if
     call h5fcreate_f(file%path, H5F_ACC_TRUNC_F, file%id, status, access_prp=access)
     call require_ok(status, 'creating the file', file)
     call h5pclose_f(access, status)

@@ -2,7 +2,8 @@
 !> Unit tests of checkpoint_files on 2 ranks: checkpoint transactions (components write and read their
 !> own groups, one commit), write-then-rename, newest valid checkpoint, pruning beyond
 !> checkpoints_kept, a killed run (a .tmp file left behind) that is ignored, and damaged checkpoints:
-!> a corrupted data byte (caught by the Fletcher-32 checksum), a truncated and a zeroed file, and
+!> a corrupted data byte (caught by the Fletcher-32 checksum), a damaged header (caught by the
+!> metadata checksums of the 1.8 file format), a truncated and a zeroed file, and
 !> files merely named like the newest checkpoint, each passed over for the previous valid one.
 !> Reference: the file names and contents the test itself wrote.
 program test_checkpoint_files
@@ -114,6 +115,13 @@ program test_checkpoint_files
   end if
   call barrier()
 
+  ! A damaged header (one byte of a group name): caught by the metadata checksums of the file format.
+  call write_checkpoint(90_i8, 5)
+  if (is_root()) call damage(checkpoint_path(90_i8), 'header')
+  call barrier()
+  newest = newest_checkpoint()
+  call check(newest == checkpoint_path(80_i8), 'damaged_header_caught_by_checksum', newest)
+
   ! Steps above 2**31 (integer(i8) step counters) name files too.
   call write_checkpoint(3000000000_i8, 1)
   call check(newest_checkpoint() == checkpoint_path(3000000000_i8), 'i8_step_names_checkpoint')
@@ -146,7 +154,7 @@ contains
   end subroutine write_checkpoint
 
   !> 'flip': change one byte of the first stored value of rank 0's field (1/7: a finite, wrong value
-  !> without a checksum); 'truncate': keep the first half; 'zero': the same size in zero bytes.
+  !> without a checksum); 'header': change a letter of the group name component_b; 'truncate': keep the first half; 'zero': the same size in zero bytes.
   subroutine damage(path, how)
     character(len=*), intent(in) :: path, how
     integer(int8), allocatable :: bytes(:), pattern(:)
@@ -164,6 +172,13 @@ contains
       end do
       call check(i <= n - size(pattern) + 1, 'damage_flip_found_the_value')
       bytes(i) = not(bytes(i))
+    case ('header')
+      pattern = transfer('component_b', [0_int8])
+      do i = 1, n - size(pattern) + 1
+        if (all(bytes(i:i + size(pattern) - 1) == pattern)) exit
+      end do
+      call check(i <= n - size(pattern) + 1, 'damage_header_found_the_name')
+      bytes(i + 1) = bytes(i + 1) + 1_int8   ! 'component_b' -> 'cpmponent_b'
     case ('truncate')
       bytes = bytes(1:n / 2)
     case ('zero')
