@@ -216,6 +216,8 @@ contains
     end if
     do pass = 1, 2   ! files first, then the (now empty) directories they were in
       do i = size(names), 1, -1
+        ! Only names inside the run directory (an edited manifest cannot reach outside it).
+        if (names(i)(1:1) == '/' .or. index(names(i), '..') > 0) cycle
         call remove_path(directory//'/'//trim(names(i))//'.tmp', ok)
         call remove_path(directory//'/'//trim(names(i)), ok)
       end do
