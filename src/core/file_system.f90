@@ -1,11 +1,12 @@
-!> Small file-system routines. Renames go through the C library's rename(), which is atomic
-!> within one file system: a file written to a temporary name and renamed is either the old
-!> complete file or the new complete file, never a torn one.
+!> Small file-system routines over system calls (file_system_c.c and the C library): no shell ever
+!> sees a path, so every character of it is taken literally. Renames go through the C library's
+!> rename(), which is atomic within one file system: a file written to a temporary name and renamed
+!> is either the old complete file or the new complete file, never a torn one.
 module file_system
   use, intrinsic :: iso_c_binding, only: c_int, c_char, c_null_char
   implicit none
   private
-  public :: rename_file, file_exists, directory_exists, make_directory, delete_file
+  public :: rename_file, file_exists, directory_exists, make_directory, delete_file, remove_path
 
   interface
     function c_rename(old_path, new_path) bind(C, name='rename') result(status)
@@ -13,6 +14,25 @@ module file_system
       character(kind=c_char), intent(in) :: old_path(*), new_path(*)
       integer(c_int) :: status
     end function c_rename
+
+    function c_make_directories(path) bind(C, name='agglo_make_directories') result(error)
+      import :: c_int, c_char
+      character(kind=c_char), intent(in) :: path(*)
+      integer(c_int) :: error
+    end function c_make_directories
+
+    function c_remove_path(path) bind(C, name='agglo_remove_path') result(error)
+      import :: c_int, c_char
+      character(kind=c_char), intent(in) :: path(*)
+      integer(c_int) :: error
+    end function c_remove_path
+
+    subroutine c_error_text(code, buffer, capacity) bind(C, name='agglo_error_text')
+      import :: c_int, c_char
+      integer(c_int), value :: code
+      character(kind=c_char), intent(out) :: buffer(*)
+      integer(c_int), value :: capacity
+    end subroutine c_error_text
   end interface
 
 contains
@@ -34,19 +54,44 @@ contains
     inquire(file=trim(path)//'/.', exist=directory_exists)
   end function directory_exists
 
-  !> mkdir -p; ok tells whether the directory exists afterwards.
-  subroutine make_directory(path, ok)
+  !> mkdir -p (a system call per missing directory); ok tells whether the directory exists
+  !> afterwards, reason says why not (the system's error text).
+  subroutine make_directory(path, ok, reason)
     character(len=*), intent(in) :: path
     logical, intent(out) :: ok
-    integer :: status
-    if (.not. directory_exists(path)) call execute_command_line('mkdir -p "'//trim(path)//'"', exitstat=status)
-    ok = directory_exists(path)
+    character(len=:), allocatable, intent(out), optional :: reason
+    integer(c_int) :: error
+    error = c_make_directories(trim(path)//c_null_char)
+    ok = (error == 0_c_int)
+    if (present(reason)) reason = error_text(error)
   end subroutine make_directory
 
+  !> Remove a file, or a directory if it is empty; ok = .false. (and nothing changed) otherwise.
+  subroutine remove_path(path, ok)
+    character(len=*), intent(in) :: path
+    logical, intent(out) :: ok
+    ok = (c_remove_path(trim(path)//c_null_char) == 0_c_int)
+  end subroutine remove_path
+
+  !> Remove a file if it exists (nothing happens if it does not).
   subroutine delete_file(path)
     character(len=*), intent(in) :: path
-    integer :: unit, ios
-    open(newunit=unit, file=trim(path), status='old', iostat=ios)
-    if (ios == 0) close(unit, status='delete')
+    logical :: ok
+    if (file_exists(path)) call remove_path(path, ok)
   end subroutine delete_file
+
+  !> The system's text for an errno value ('' for 0).
+  function error_text(code) result(text)
+    integer(c_int), intent(in) :: code
+    character(len=:), allocatable :: text
+    character(kind=c_char) :: buffer(200)
+    integer :: i
+    text = ''
+    if (code == 0_c_int) return
+    call c_error_text(code, buffer, int(size(buffer), c_int))
+    do i = 1, size(buffer)
+      if (buffer(i) == c_null_char) exit
+      text = text//buffer(i)
+    end do
+  end function error_text
 end module file_system

@@ -1,17 +1,17 @@
-!> Fluid state in files: checkpoints (everything for a bit-for-bit continuation), field snapshots,
-!> and the initial field read from a file. Built on hdf5_io / checkpoint_files /
+!> Fluid state in files: its group of a checkpoint (everything for a bit-for-bit continuation),
+!> field snapshots, and the initial field read from a file. Built on hdf5_io / checkpoint_files /
 !> field_output. All routines are collective.
 !>
-!> Checkpoint datasets (Fortran shapes): fluid/u, fluid/v, fluid/w, fluid/pressure,
-!> fluid/explicit_old_u|v|w (nx, ny, nz); fluid/grid_shape (3); fluid/time, fluid/dt_old (s);
-!> fluid/step (integer(i8)); fluid/has_history (0 | 1).
+!> Checkpoint group 'fluid' (Fortran shapes): fluid/u, fluid/v, fluid/w, fluid/pressure,
+!> fluid/explicit_old_u|v|w (nx, ny, nz); fluid/grid_shape (3); fluid/box_length (3, m);
+!> fluid/time, fluid/dt_old (s); fluid/step (integer(i8)); fluid/has_history (0 | 1).
 module fluid_restart
   use agglo_kinds, only: wp, i8
   use error_handling, only: fatal
-  use text_format, only: int_text
+  use text_format, only: int_text, real_text
   use hdf5_io, only: h5_file_t, h5_open, h5_close, h5_exists, h5_write_slab, h5_read_slab, h5_write_array, &
                      h5_read_array
-  use checkpoint_files, only: checkpoint_begin, checkpoint_commit
+  use checkpoint_files, only: checkpoint_t
   use field_output, only: field_snapshot_t, field_snapshot_begin, field_snapshot_add, field_snapshot_end, &
                           at_cell_centre, at_x_face, at_y_face, at_z_face
   use fluid_solver, only: fluid_solver_t, fluid_exchange_velocity
@@ -19,29 +19,28 @@ module fluid_restart
   private
   public :: write_fluid_checkpoint, read_fluid_checkpoint, write_fluid_state, write_fluid_snapshot, read_initial_field
 
+  !> Relative difference below which a stored box length is the deck's (the same decimal in a deck
+  !> gives the same double; this only forgives a last-digit rewrite of the same length).
+  real(wp), parameter :: box_tolerance = 1.0e-12_wp
+
 contains
 
-  subroutine write_fluid_checkpoint(solver, checkpoints_kept, forcing_state)
+  !> The fluid's group of an open checkpoint (checkpoint_begin .. checkpoint_commit).
+  subroutine write_fluid_checkpoint(checkpoint, solver)
+    type(checkpoint_t), intent(in) :: checkpoint
     type(fluid_solver_t), intent(in) :: solver
-    integer, intent(in) :: checkpoints_kept
-    integer(i8), intent(in), optional :: forcing_state(:)   ! packed Eswaran-Pope state (forcing_driver)
-    type(h5_file_t) :: file
-    call checkpoint_begin(solver%step, file)
-    call write_fluid_state(file, solver)
-    call write_interior(file, 'fluid/explicit_old_u', solver%explicit_old_u, solver)
-    call write_interior(file, 'fluid/explicit_old_v', solver%explicit_old_v, solver)
-    call write_interior(file, 'fluid/explicit_old_w', solver%explicit_old_w, solver)
-    call h5_write_array(file, 'fluid/dt_old', solver%dt_old)
-    call h5_write_array(file, 'fluid/step', solver%step)
-    call h5_write_array(file, 'fluid/has_history', merge(1, 0, solver%has_history))
-    if (present(forcing_state)) then
-      if (size(forcing_state) > 0) call h5_write_array(file, 'forcing/state', forcing_state)
-    end if
-    call checkpoint_commit(file, solver%step, checkpoints_kept)
+    call write_fluid_state(checkpoint%file, solver)
+    call write_interior(checkpoint%file, 'fluid/explicit_old_u', solver%explicit_old_u, solver)
+    call write_interior(checkpoint%file, 'fluid/explicit_old_v', solver%explicit_old_v, solver)
+    call write_interior(checkpoint%file, 'fluid/explicit_old_w', solver%explicit_old_w, solver)
+    call h5_write_array(checkpoint%file, 'fluid/dt_old', solver%dt_old)
+    call h5_write_array(checkpoint%file, 'fluid/step', solver%step)
+    call h5_write_array(checkpoint%file, 'fluid/has_history', merge(1, 0, solver%has_history))
   end subroutine write_fluid_checkpoint
 
-  !> Into an open file: the velocity and pressure (fluid/u, v, w, pressure), fluid/grid_shape and
-  !> fluid/time: what &fluid init = 'file' reads (read_initial_field) on any rank count.
+  !> Into an open file: the velocity and pressure (fluid/u, v, w, pressure), fluid/grid_shape,
+  !> fluid/box_length and fluid/time: what &fluid init = 'file' reads (read_initial_field) on any
+  !> rank count.
   subroutine write_fluid_state(file, solver)
     type(h5_file_t), intent(in) :: file
     type(fluid_solver_t), intent(in) :: solver
@@ -50,6 +49,7 @@ contains
     call write_interior(file, 'fluid/w', solver%w, solver)
     call write_interior(file, 'fluid/pressure', solver%pressure, solver)
     call h5_write_array(file, 'fluid/grid_shape', [solver%grid%nx, solver%grid%ny, solver%grid%nz])
+    call h5_write_array(file, 'fluid/box_length', [solver%grid%lx, solver%grid%ly, solver%grid%lz])
     call h5_write_array(file, 'fluid/time', solver%time)
   end subroutine write_fluid_state
 
@@ -63,27 +63,29 @@ contains
     call h5_write_slab(file, name, interior, solver%grid%z_offset, [solver%grid%nx, solver%grid%ny, solver%grid%nz])
   end subroutine write_interior
 
-  !> The whole solver state from a checkpoint (any rank count: the slabs are re-cut on reading).
-  subroutine read_fluid_checkpoint(solver, path)
+  !> The whole solver state from the fluid's group of an open checkpoint (any rank count: the slabs
+  !> are re-cut on reading).
+  subroutine read_fluid_checkpoint(checkpoint, solver)
+    type(checkpoint_t), intent(in) :: checkpoint
     type(fluid_solver_t), intent(inout) :: solver
-    character(len=*), intent(in) :: path
-    type(h5_file_t) :: file
     integer :: flag
-    call h5_open(file, path, writable=.false.)
-    call require_grid(file, 'fluid/grid_shape', path, solver)
-    call read_interior(file, 'fluid/u', solver%u, solver)
-    call read_interior(file, 'fluid/v', solver%v, solver)
-    call read_interior(file, 'fluid/w', solver%w, solver)
-    call read_interior(file, 'fluid/pressure', solver%pressure, solver)
-    call read_interior(file, 'fluid/explicit_old_u', solver%explicit_old_u, solver)
-    call read_interior(file, 'fluid/explicit_old_v', solver%explicit_old_v, solver)
-    call read_interior(file, 'fluid/explicit_old_w', solver%explicit_old_w, solver)
-    call h5_read_array(file, 'fluid/time', solver%time)
-    call h5_read_array(file, 'fluid/dt_old', solver%dt_old)
-    call h5_read_array(file, 'fluid/step', solver%step)
-    call h5_read_array(file, 'fluid/has_history', flag)
+    associate (file => checkpoint%file, path => checkpoint%path)
+      if (.not. h5_exists(file, 'fluid/u')) call fatal('checkpoint '//path//' holds no fluid state (group fluid)')
+      call require_grid(file, 'fluid/grid_shape', path, solver)
+      call require_box(file, 'fluid/box_length', path, solver)
+      call read_interior(file, 'fluid/u', solver%u, solver)
+      call read_interior(file, 'fluid/v', solver%v, solver)
+      call read_interior(file, 'fluid/w', solver%w, solver)
+      call read_interior(file, 'fluid/pressure', solver%pressure, solver)
+      call read_interior(file, 'fluid/explicit_old_u', solver%explicit_old_u, solver)
+      call read_interior(file, 'fluid/explicit_old_v', solver%explicit_old_v, solver)
+      call read_interior(file, 'fluid/explicit_old_w', solver%explicit_old_w, solver)
+      call h5_read_array(file, 'fluid/time', solver%time)
+      call h5_read_array(file, 'fluid/dt_old', solver%dt_old)
+      call h5_read_array(file, 'fluid/step', solver%step)
+      call h5_read_array(file, 'fluid/has_history', flag)
+    end associate
     solver%has_history = (flag == 1)
-    call h5_close(file)
     call fluid_exchange_velocity(solver)
   end subroutine read_fluid_checkpoint
 
@@ -99,9 +101,11 @@ contains
     if (h5_exists(file, 'fields/u')) then
       group = 'fields/'
       call require_grid(file, 'grid/shape', path, solver)
+      call require_box(file, 'grid/lengths', path, solver)
     else if (h5_exists(file, 'fluid/u')) then
       group = 'fluid/'
       call require_grid(file, 'fluid/grid_shape', path, solver)
+      call require_box(file, 'fluid/box_length', path, solver)
     else
       call fatal('deck: &fluid init_file = '''//trim(path)//''' holds no velocity field '// &
                  '(expected fields/u, v, w of a field snapshot or fluid/u, v, w of a checkpoint)')
@@ -126,6 +130,24 @@ contains
         ' grid, the deck''s &grid is '//int_text(solver%grid%nx)//' x '//int_text(solver%grid%ny)//' x '// &
         int_text(solver%grid%nz))
   end subroutine require_grid
+
+  !> The box lengths stored in a file (name, 3 values in m) must be the deck's &grid length_x, y, z.
+  subroutine require_box(file, name, path, solver)
+    type(h5_file_t), intent(in) :: file
+    character(len=*), intent(in) :: name, path
+    type(fluid_solver_t), intent(in) :: solver
+    real(wp), allocatable :: stored(:)
+    real(wp) :: deck(3)
+    deck = [solver%grid%lx, solver%grid%ly, solver%grid%lz]
+    if (.not. h5_exists(file, name)) call fatal('file '//trim(path)//' does not say its box size ('//name// &
+        ' is missing: written by an older Agglo?), so it cannot be checked against the deck''s &grid')
+    call h5_read_array(file, name, stored)
+    if (size(stored) /= 3) call fatal('file '//trim(path)//': '//name//' is not a 3-vector')
+    if (any(abs(stored - deck) > box_tolerance * abs(deck))) call fatal('file '//trim(path)// &
+        ' holds a box of '//real_text(stored(1))//' x '//real_text(stored(2))//' x '//real_text(stored(3))// &
+        ' m, the deck''s &grid length_x, length_y, length_z are '//real_text(deck(1))//' x '// &
+        real_text(deck(2))//' x '//real_text(deck(3))//' m')
+  end subroutine require_box
 
   subroutine read_interior(file, name, field, solver)
     type(h5_file_t), intent(in) :: file

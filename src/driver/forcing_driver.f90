@@ -16,12 +16,13 @@ module forcing_driver
   use hdf5_io, only: h5_file_t, h5_create, h5_open, h5_close, h5_exists, h5_write_array, h5_read_array
   use fluid_solver, only: fluid_solver_t, fluid_advance
   use fluid_restart, only: write_fluid_state
+  use checkpoint_files, only: checkpoint_t
   use eswaran_pope_forcing, only: ep_forcing_t, forcing_init_on_grid, forcing_advance, forcing_set_fields, &
                                   forcing_power_input, forcing_pack_state, forcing_unpack_state
   implicit none
   private
   public :: forcing_driver_t, forcing_driver_start, forced_fluid_advance, forcing_driver_power_input, &
-            forcing_driver_state, forcing_driver_finish
+            forcing_driver_write_checkpoint, forcing_driver_finish
 
   type :: forcing_driver_t
     logical :: active = .false.                 !< &scene forcing = 'eswaran_pope'
@@ -32,12 +33,12 @@ module forcing_driver
 contains
 
   !> Set up the forcing (if the deck asks) on the solver's grid; on a restart restore its state
-  !> from the checkpoint the fluid was read from. Collective.
-  subroutine forcing_driver_start(driver, cfg, solver, checkpoint_path)
+  !> from its group of the checkpoint the fluid was read from (open when restarting). Collective.
+  subroutine forcing_driver_start(driver, cfg, solver, restart)
     type(forcing_driver_t), intent(inout) :: driver
     type(agglo_config_t), intent(in) :: cfg
     type(fluid_solver_t), intent(in) :: solver
-    character(len=*), intent(in) :: checkpoint_path    !< '' on a fresh start
+    type(checkpoint_t), intent(in) :: restart          !< not open on a fresh start
     type(h5_file_t) :: file
     integer(i8), allocatable :: words(:)
     driver%active = (cfg%scene%forcing == 'eswaran_pope')
@@ -45,14 +46,12 @@ contains
     call forcing_init_on_grid(driver%forcing, cfg%forcing, cfg%run%seed, solver%grid)
     allocate(driver%fx, driver%fy, driver%fz, mold=solver%u)
     driver%fx = 0; driver%fy = 0; driver%fz = 0
-    if (len(checkpoint_path) > 0) then
-      call h5_open(file, checkpoint_path, writable=.false.)
-      if (.not. h5_exists(file, 'forcing/state')) call fatal('forcing: the checkpoint '//checkpoint_path// &
+    if (restart%file%is_open) then
+      if (.not. h5_exists(restart%file, 'forcing/state')) call fatal('forcing: the checkpoint '//restart%path// &
           ' has no forcing state (written by a run without forcing); &scene forcing must match the run restarted')
-      call h5_read_array(file, 'forcing/state', words)
-      call h5_close(file)
+      call h5_read_array(restart%file, 'forcing/state', words)
       call forcing_unpack_state(driver%forcing, words)
-      call log_line('forcing: OU state and random stream restored from '//checkpoint_path)
+      call log_line('forcing: OU state and random stream restored from '//restart%path)
     end if
   end subroutine forcing_driver_start
 
@@ -85,16 +84,12 @@ contains
     if (driver%active) power = forcing_power_input(driver%forcing, solver%u, solver%v, solver%w)
   end function forcing_driver_power_input
 
-  !> The packed forcing state for the checkpoint (empty when the forcing is off).
-  function forcing_driver_state(driver) result(words)
+  !> The forcing's group of an open checkpoint: the packed OU state and stream (nothing when off).
+  subroutine forcing_driver_write_checkpoint(driver, checkpoint)
     type(forcing_driver_t), intent(in) :: driver
-    integer(i8), allocatable :: words(:)
-    if (driver%active) then
-      words = forcing_pack_state(driver%forcing)
-    else
-      allocate(words(0))
-    end if
-  end function forcing_driver_state
+    type(checkpoint_t), intent(in) :: checkpoint
+    if (driver%active) call h5_write_array(checkpoint%file, 'forcing/state', forcing_pack_state(driver%forcing))
+  end subroutine forcing_driver_write_checkpoint
 
   !> At the end of a forced run: final_field.h5 in the run directory (the velocity and pressure in
   !> the layout &fluid init = 'file' reads on any rank count: fluid/u, v, w, pressure, grid_shape,

@@ -9,7 +9,8 @@ module resolved_scene
   use logger, only: log_line
   use wall_clock, only: wall_time
   use run_directory, only: run_file
-  use checkpoint_files, only: newest_checkpoint
+  use checkpoint_files, only: checkpoint_t, checkpoint_begin, checkpoint_commit, checkpoint_open_newest, &
+                              checkpoint_close
   use physical_constants, only: two_pi
   use timer_registry, only: timer_register, timer_tic, timer_toc
   use fluid_solver, only: fluid_solver_t, fluid_solver_create
@@ -19,7 +20,7 @@ module resolved_scene
   use fluid_restart, only: write_fluid_checkpoint, read_fluid_checkpoint, write_fluid_snapshot, read_initial_field
   use fluid_monitor, only: statistics_open, statistics_write, statistics_close, progress_line, timing_report
   use forcing_driver, only: forcing_driver_t, forcing_driver_start, forced_fluid_advance, &
-                            forcing_driver_power_input, forcing_driver_state, forcing_driver_finish
+                            forcing_driver_power_input, forcing_driver_write_checkpoint, forcing_driver_finish
   use flow_statistics_output, only: flow_output_t, flow_output_start, flow_output_due, flow_output_record, &
                                     flow_output_finish
   implicit none
@@ -34,15 +35,16 @@ contains
     type(fluid_statistics_t) :: stats
     type(forcing_driver_t) :: forcing   ! Eswaran-Pope body force (inactive when off)
     type(flow_output_t) :: flow         ! flow statistics (u_rms, epsilon, Re_lambda, spectrum), if switched on
-    character(len=:), allocatable :: restart_path
+    type(checkpoint_t) :: restart       ! the checkpoint continued from (open only while restoring)
     real(wp) :: dt, rate, viscous_limit, next_field_time, start_wall, step_wall
     integer(i8) :: first_step
     integer :: timer_io
     logical :: finite
 
-    call start_fluid(cfg, solver, restart_path)
+    call start_fluid(cfg, solver, restart)
     timer_io = timer_register('I/O')
-    call forcing_driver_start(forcing, cfg, solver, restart_path)
+    call forcing_driver_start(forcing, cfg, solver, restart)
+    if (cfg%run%restart) call checkpoint_close(restart)   ! every component has its state back
     call flow_output_start(flow, cfg, solver)
     viscous_limit = huge(1.0_wp)
     if (.not. solver%crank_nicolson) viscous_limit = explicit_viscous_limit(solver%grid%dx, solver%grid%dy, &
@@ -110,10 +112,15 @@ contains
       call timer_toc(timer_io)
     end subroutine output_fields
 
+    !> One checkpoint transaction: each component writes its group, then one commit.
     subroutine checkpoint(solver)
       type(fluid_solver_t), intent(inout) :: solver
+      type(checkpoint_t) :: transaction
       call timer_tic(timer_io)
-      call write_fluid_checkpoint(solver, cfg%output%checkpoints_kept, forcing_driver_state(forcing))
+      call checkpoint_begin(transaction, solver%step)
+      call write_fluid_checkpoint(transaction, solver)
+      call forcing_driver_write_checkpoint(forcing, transaction)
+      call checkpoint_commit(transaction, cfg%output%checkpoints_kept)
       call timer_toc(timer_io)
     end subroutine checkpoint
 
@@ -130,18 +137,15 @@ contains
   end subroutine run_resolved_scene
 
   !> Solver and initial state: the newest checkpoint on restart, else &fluid init.
-  subroutine start_fluid(cfg, solver, path)
+  subroutine start_fluid(cfg, solver, restart)
     type(agglo_config_t), intent(in) :: cfg
     type(fluid_solver_t), intent(inout) :: solver
-    character(len=:), allocatable, intent(out) :: path   ! the checkpoint restarted from ('' if none)
-    path = ''
+    type(checkpoint_t), intent(out) :: restart   ! on restart: the newest valid checkpoint, left open
     call fluid_solver_create(solver, cfg%grid, cfg%fluid)
     if (cfg%run%restart) then
-      path = newest_checkpoint()
-      if (len(path) == 0) call fatal('deck: &run restart = .true. but the run directory '//run_file('checkpoints')// &
-                                     ' holds no complete checkpoint to continue from')
-      call read_fluid_checkpoint(solver, path)
-      call log_line('resolved scene: continuing from '//path)
+      call checkpoint_open_newest(restart)
+      call read_fluid_checkpoint(restart, solver)
+      call log_line('resolved scene: continuing from '//restart%path)
       return
     end if
     select case (trim(cfg%fluid%init))

@@ -28,16 +28,17 @@ module field_output
   use agglo_kinds, only: wp, i8
   use error_handling, only: fatal
   use text_format, only: real_text => exact_real_text
-  use file_system, only: rename_file
+  use file_system, only: rename_file, remove_path
   use parallel_env, only: is_root, barrier
-  use run_directory, only: run_directory_path
+  use run_directory, only: run_directory_path, run_file, record_run_file, forget_run_file
+  use logger, only: log_line
   use directory_listing, only: list_directory, name_length
   use hdf5_io, only: h5_file_t, h5_create, h5_open, h5_close, h5_write_slab, h5_write_array, h5_read_array, &
                      h5_write_string, h5_read_string
   implicit none
   private
   public :: field_snapshot_t, field_snapshot_begin, field_snapshot_add, field_snapshot_end, write_field_snapshot, &
-            field_snapshot_name, at_cell_centre, at_x_face, at_y_face, at_z_face
+            field_snapshot_name, discard_snapshots_after, at_cell_centre, at_x_face, at_y_face, at_z_face
 
   character(len=*), parameter :: at_cell_centre = 'centre'   !< pressure and other cell-centred fields
   character(len=*), parameter :: at_x_face = 'x_face'        !< u
@@ -107,7 +108,11 @@ contains
     snapshot%lengths = lengths
     snapshot%names = ''
     snapshot%locations = ''
-    call h5_create(snapshot%file, snapshot%directory//'/'//field_snapshot_name(step), complete_on_close=.true.)
+    if (present(directory)) then
+      call h5_create(snapshot%file, snapshot%directory//'/'//field_snapshot_name(step), complete_on_close=.true.)
+    else   ! a file of the run: recorded in its manifest
+      call h5_create(snapshot%file, run_file(field_snapshot_name(step)), complete_on_close=.true.)
+    end if
   end subroutine snapshot_begin_i8
 
   subroutine snapshot_begin_int(snapshot, step, time, global_shape, lengths, directory)
@@ -151,9 +156,50 @@ contains
     call h5_write_string(snapshot%file, 'field_names', snapshot%names)
     call h5_write_string(snapshot%file, 'field_locations', snapshot%locations)
     call h5_close(snapshot%file)   ! renames the .tmp file once every rank has written
-    if (is_root()) call write_xdmf(snapshot%directory, snapshot%step)
+    if (is_root()) then
+      if (snapshot%directory == run_directory_path()) call record_run_file(xdmf_name)
+      call write_xdmf(snapshot%directory, snapshot%step)
+    end if
     call barrier()
   end subroutine field_snapshot_end
+
+  !> On restart from the checkpoint of step: delete the run's snapshots of later steps (written by
+  !> the interrupted or stopped run, e.g. the field dump of a CFL or NaN stop: not part of the continued
+  !> history) and rebuild fields.xdmf without them. Collective.
+  subroutine discard_snapshots_after(step)
+    integer(i8), intent(in) :: step
+    character(len=name_length), allocatable :: names(:)
+    character(len=:), allocatable :: directory
+    integer(i8) :: snapshot_step
+    integer :: i, ios, removed
+    logical :: ok
+    directory = run_directory_path()
+    removed = 0
+    if (is_root()) then
+      call list_directory(directory, names, ok)
+      do i = 1, size(names)
+        if (len_trim(names(i)) /= 20 .or. names(i)(1:7) /= 'fields_' .or. names(i)(18:20) /= '.h5') cycle
+        if (verify(names(i)(8:17), '0123456789') /= 0) cycle
+        read(names(i)(8:17), '(i10)', iostat=ios) snapshot_step
+        if (ios /= 0 .or. snapshot_step <= step) cycle
+        call remove_path(directory//'/'//trim(names(i)), ok)
+        call forget_run_file(trim(names(i)))
+        call log_line('restart: '//trim(names(i))//' (written after step '//step_text(step)// &
+                      ' by the interrupted run) removed')
+        removed = removed + 1
+      end do
+      if (removed > 0) call write_xdmf(directory, step)
+    end if
+    call barrier()
+  end subroutine discard_snapshots_after
+
+  function step_text(step) result(text)
+    integer(i8), intent(in) :: step
+    character(len=:), allocatable :: text
+    character(len=24) :: buffer
+    write(buffer, '(i0)') step
+    text = trim(buffer)
+  end function step_text
 
   subroutine write_field_snapshot_i8(names, locations, fields, z_offset, global_shape, lengths, time, step, directory)
     character(len=*), intent(in) :: names(:), locations(:)

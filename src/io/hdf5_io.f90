@@ -17,11 +17,18 @@
 !> h5_create(..., complete_on_close = .true.) writes <path>.tmp and h5_close renames it to <path>
 !> once every rank has written (checkpoints, snapshots, final fields): a killed run leaves at most
 !> a .tmp file, never a torn file under the final name.
+!> h5_create(..., checksums = .true.) stores every dataset chunked with HDF5's Fletcher-32 checksum
+!> filter (scalars as 1-element arrays, which h5_read_array reads as scalars): a corrupted chunk is
+!> then an error on reading, never wrong values; h5_verify reads a whole file to check it (checkpoints).
+!> Parallel files take paths of at most longest_parallel_path characters (Open MPI limit, below).
 !> Call hdf5_io_finalize once before MPI_Finalize (the library is opened on first use).
 module hdf5_io
   use, intrinsic :: iso_c_binding, only: c_ptr, c_loc, c_char, c_null_char
   use hdf5, only: hid_t, hsize_t, size_t, h5open_f, h5close_f, h5kind_to_type, H5_REAL_KIND, H5_INTEGER_KIND, &
                   h5pcreate_f, h5pclose_f, h5pset_fapl_mpio_f, h5pset_dxpl_mpio_f, h5pset_chunk_f, &
+                  h5pset_fletcher32_f, h5eset_auto_f, h5gn_members_f, h5gget_obj_info_idx_f, H5G_GROUP_F, &
+                  H5G_DATASET_F, h5pset_fill_time_f, H5D_FILL_TIME_NEVER_F, &
+                  h5pset_libver_bounds_f, H5F_LIBVER_V18_F, H5F_LIBVER_LATEST_F, &
                   H5P_FILE_ACCESS_F, H5P_DATASET_XFER_F, H5P_DATASET_CREATE_F, &
                   H5FD_MPIO_COLLECTIVE_F, h5fcreate_f, h5fopen_f, h5fclose_f, h5fflush_f, &
                   H5F_ACC_TRUNC_F, H5F_ACC_RDWR_F, H5F_ACC_RDONLY_F, H5F_SCOPE_GLOBAL_F, &
@@ -41,7 +48,13 @@ module hdf5_io
   private
   public :: h5_file_t, h5_create, h5_open, h5_close, h5_flush, h5_exists, &
             h5_write_slab, h5_read_slab, h5_write_array, h5_read_array, h5_write_string, h5_read_string, &
-            h5_append, h5_truncate, h5_delete, h5_dataset_shape, hdf5_io_finalize
+            h5_append, h5_truncate, h5_delete, h5_dataset_shape, hdf5_io_finalize, h5_verify, longest_parallel_path
+
+  !> Longest path of a file opened through MPI-IO. Open MPI 4.1.4's shared-file-pointer component
+  !> 'lockedfile' probes every file it opens with a lock file named <path>.locktest.<rank>, built with
+  !> sprintf into a fixed buffer: with this Open MPI a 228-character path worked and 229 aborted
+  !> (buffer overflow, SIGABRT) on 1 and 2 ranks. 220 leaves room for rank numbers up to 9 digits.
+  integer, parameter :: longest_parallel_path = 220
 
   !> An open HDF5 file (parallel over MPI_COMM_WORLD, or serial on the calling rank).
   type :: h5_file_t
@@ -50,6 +63,7 @@ module hdf5_io
     logical :: is_open = .false.
     logical :: serial = .false.              !< opened by this rank alone with the default driver
     logical :: writable = .false.
+    logical :: checksums = .false.           !< datasets chunked with the Fletcher-32 filter
     character(len=:), allocatable :: path
     character(len=:), allocatable :: complete_path   !< '' or the name path gets when the file is closed
   end type h5_file_t
@@ -131,11 +145,12 @@ contains
   end subroutine make_property_lists
 
   !> Create (truncate) a file. Collective unless serial = .true. (then this rank alone).
-  subroutine h5_create(file, path, serial, complete_on_close)
+  subroutine h5_create(file, path, serial, complete_on_close, checksums)
     type(h5_file_t), intent(out) :: file
     character(len=*), intent(in) :: path
     logical, intent(in), optional :: serial
     logical, intent(in), optional :: complete_on_close   !< write path.tmp; h5_close renames it to path
+    logical, intent(in), optional :: checksums           !< Fletcher-32 on every dataset
     integer(hid_t) :: access
     integer :: status
     call open_library()
@@ -149,7 +164,15 @@ contains
     end if
     file%serial = .false.
     if (present(serial)) file%serial = serial
+    if (present(checksums)) file%checksums = checksums
+    call require_path_length(file)
     call make_property_lists(file, access)
+    if (file%checksums) then
+      ! The 1.8 file format and later checksum the file's metadata too (superblock v2, object
+      ! headers v2, B-tree v2 nodes), so a damaged header is caught like damaged data.
+      call h5pset_libver_bounds_f(access, H5F_LIBVER_V18_F, H5F_LIBVER_LATEST_F, status)
+      call require_ok(status, 'h5pset_libver_bounds', file)
+    end if
     call h5fcreate_f(file%path, H5F_ACC_TRUNC_F, file%id, status, access_prp=access)
     call require_ok(status, 'creating the file', file)
     call h5pclose_f(access, status)
@@ -171,6 +194,7 @@ contains
     if (present(serial)) file%serial = serial
     if (.not. file_exists(file%path)) call fatal('hdf5_io: cannot open '//file%path//': no such file', &
                                                  collective=.not. file%serial)
+    call require_path_length(file)
     call make_property_lists(file, access)
     if (writable) then
       call h5fopen_f(file%path, H5F_ACC_RDWR_F, file%id, status, access_prp=access)
@@ -182,6 +206,16 @@ contains
     file%is_open = .true.
     file%writable = writable
   end subroutine h5_open
+
+  !> A parallel file's path must fit Open MPI's buffer (longest_parallel_path).
+  subroutine require_path_length(file)
+    type(h5_file_t), intent(in) :: file
+    character(len=16) :: text
+    if (file%serial .or. len(file%path) <= longest_parallel_path) return
+    write(text, '(i0)') longest_parallel_path
+    call fatal('hdf5_io: the path '//file%path//' is longer than '//trim(text)// &
+               ' characters, the longest that MPI-IO opens safely here', collective=.false.)
+  end subroutine require_path_length
 
   subroutine h5_close(file)
     type(h5_file_t), intent(inout) :: file
@@ -340,10 +374,22 @@ contains
       call h5screate_simple_f(size(dims), dims, space, status)
     end if
     call require_ok(status, 'creating a dataspace', file, name)
-    if (present(chunk)) then
+    if (present(chunk) .or. file%checksums .and. size(dims) > 0) then
       call h5pcreate_f(H5P_DATASET_CREATE_F, properties, status)
-      call h5pset_chunk_f(properties, size(chunk), chunk, status)
+      if (present(chunk)) then
+        call h5pset_chunk_f(properties, size(chunk), chunk, status)
+      else
+        call h5pset_chunk_f(properties, size(dims), checksum_chunk(dims), status)
+      end if
       call require_ok(status, 'setting the chunk size', file, name)
+      if (file%checksums) then
+        call h5pset_fletcher32_f(properties, status)
+        call require_ok(status, 'setting the Fletcher-32 filter', file, name)
+        ! Every value is written: no fill values first (a parallel file allocates chunks at creation
+        ! and would otherwise write each chunk twice).
+        call h5pset_fill_time_f(properties, H5D_FILL_TIME_NEVER_F, status)
+        call require_ok(status, 'setting the fill time', file, name)
+      end if
       call h5dcreate_f(file%id, name, type_id, space, dataset, status, dcpl_id=properties)
       call h5pclose_f(properties, status)
     else
@@ -352,6 +398,24 @@ contains
     call require_ok(status, 'creating a dataset', file, name)
     call h5sclose_f(space, status)
   end subroutine open_for_writing
+
+  !> Chunk shape of a checksummed dataset: whole planes (the last index cut), as many as divide the
+  !> last extent within 512 KiB (below HDF5's default 1 MiB chunk cache: 1 MiB chunks made a 64^3
+  !> checkpoint on 2 ranks twice as slow). Dividing the extent keeps chunks inside the ranks' z-slabs
+  !> of the usual grids (a chunk shared by two ranks costs a redistribution in parallel filtered
+  !> writes). Empty extents give 1 (HDF5 needs > 0).
+  pure function checksum_chunk(dims) result(chunk)
+    integer(hsize_t), intent(in) :: dims(:)
+    integer(hsize_t) :: chunk(size(dims))
+    integer(hsize_t), parameter :: chunk_values = 65536_hsize_t   ! 512 KiB of 8-byte values
+    integer :: last
+    chunk = max(dims, 1_hsize_t)
+    last = size(dims)
+    chunk(last) = max(1_hsize_t, min(chunk(last), chunk_values / max(1_hsize_t, product(chunk(1:last - 1)))))
+    do while (mod(max(dims(last), 1_hsize_t), chunk(last)) /= 0)
+      chunk(last) = chunk(last) - 1_hsize_t
+    end do
+  end function checksum_chunk
 
   !> Shape of a dataset in Fortran order (size 0 for a scalar).
   function h5_dataset_shape(file, name) result(dims)
@@ -408,7 +472,11 @@ contains
     type(c_ptr), intent(in) :: buffer
     integer(hid_t) :: dataset, file_space, memory_space
     integer :: status
-    call open_for_writing(file, name, type_id, dims, dataset)
+    if (file%checksums .and. size(dims) == 0) then   ! a scalar cannot be chunked: 1 value, checksummed
+      call open_for_writing(file, name, type_id, [1_hsize_t], dataset)
+    else
+      call open_for_writing(file, name, type_id, dims, dataset)
+    end if
     if (size(dims) > 0) then
       if (product(dims) == 0) then   ! an empty dataset has no storage to write (HDF5 rejects it)
         call h5dclose_f(dataset, status)
@@ -441,6 +509,10 @@ contains
     if (.not. h5_exists(file, name)) call fatal('hdf5_io: no dataset '//trim(name)//' in '//file%path, &
                                                 collective=.false.)
     dims = h5_dataset_shape(file, name)
+    if (expected_rank == 0 .and. size(dims) == 1) then   ! a scalar of a checksummed file
+      if (dims(1) == 1_hsize_t) deallocate(dims)
+      if (.not. allocated(dims)) allocate(dims(0))
+    end if
     if (size(dims) /= expected_rank) then
       write(text, '(i0,a,i0)') size(dims), ' not ', expected_rank
       call fatal('hdf5_io: dataset '//trim(name)//' in '//file%path//' has rank '//trim(text), collective=.false.)
@@ -941,4 +1013,134 @@ contains
     call h5ldelete_f(file%id, name, status)
     call require_ok(status, 'deleting a link', file, name)
   end subroutine h5_delete
+
+  ! ---------------------------------------------------------------------------------------------
+  ! Verification
+  ! ---------------------------------------------------------------------------------------------
+
+  !> Check a whole file on the calling rank alone: it opens as HDF5 and every dataset in every group
+  !> reads back (with the checksums of a checksummed file verified, plane by plane). ok = .false. with
+  !> the reason when not; HDF5's own error report is silenced meanwhile (a damaged file is an
+  !> expected answer here, not an error of the program).
+  subroutine h5_verify(path, ok, reason)
+    character(len=*), intent(in) :: path
+    logical, intent(out) :: ok
+    character(len=:), allocatable, intent(out) :: reason
+    type(h5_file_t) :: file
+    integer(hid_t) :: access
+    integer :: status
+    call open_library()
+    ok = .false.
+    reason = ''
+    if (.not. file_exists(path)) then
+      reason = 'no such file'
+      return
+    end if
+    call h5eset_auto_f(0, status)
+    file%path = trim(path)
+    file%serial = .true.
+    call make_property_lists(file, access)
+    call h5fopen_f(file%path, H5F_ACC_RDONLY_F, file%id, status, access_prp=access)
+    call h5pclose_f(access, status)
+    if (status < 0) then
+      reason = 'not a readable HDF5 file (truncated or overwritten?)'
+    else
+      file%is_open = .true.
+      call verify_group(file, '/', ok, reason)
+      call h5pclose_f(file%transfer, status)
+      call h5fclose_f(file%id, status)
+      if (ok .and. status < 0) then
+        ok = .false.
+        reason = 'the file does not close cleanly'
+      end if
+    end if
+    call h5eset_auto_f(1, status)
+  end subroutine h5_verify
+
+  !> Read every dataset below group (recursively); stops at the first failure.
+  recursive subroutine verify_group(file, group, ok, reason)
+    type(h5_file_t), intent(in) :: file
+    character(len=*), intent(in) :: group
+    logical, intent(out) :: ok
+    character(len=:), allocatable, intent(inout) :: reason
+    character(len=256) :: member
+    integer :: members, i, kind, status
+    ok = .false.
+    call h5gn_members_f(file%id, group, members, status)
+    if (status < 0) then
+      reason = 'cannot list group '//group
+      return
+    end if
+    do i = 0, members - 1
+      call h5gget_obj_info_idx_f(file%id, group, i, member, kind, status)
+      if (status < 0) then
+        reason = 'cannot read the entries of group '//group
+        return
+      end if
+      if (kind == H5G_GROUP_F) then
+        call verify_group(file, group//trim(member)//'/', ok, reason)
+      else if (kind == H5G_DATASET_F) then
+        call verify_dataset(file, group//trim(member), ok, reason)
+      else
+        ok = .true.
+      end if
+      if (.not. ok) return
+    end do
+    ok = .true.
+  end subroutine verify_group
+
+  !> Read a dataset of any type and shape, one plane (last index) at a time, as raw bytes.
+  subroutine verify_dataset(file, name, ok, reason)
+    type(h5_file_t), intent(in) :: file
+    character(len=*), intent(in) :: name
+    logical, intent(out) :: ok
+    character(len=:), allocatable, intent(inout) :: reason
+    integer(hid_t) :: dataset, stored_type, file_space, memory_space
+    integer(hsize_t), allocatable :: dims(:), maxdims(:), start(:), count(:)
+    integer(size_t) :: value_bytes
+    integer(hsize_t) :: plane, k
+    integer(kind=1), allocatable, target :: buffer(:)
+    type(c_ptr) :: destination   ! h5dread_f takes its buffer address intent(inout)
+    integer :: status, ndims, closed
+    ok = .false.
+    reason = 'cannot read dataset '//name
+    call h5dopen_f(file%id, name, dataset, status)
+    if (status < 0) return
+    call h5dget_type_f(dataset, stored_type, status)
+    call h5tget_size_f(stored_type, value_bytes, status)
+    call h5dget_space_f(dataset, file_space, status)
+    call h5sget_simple_extent_ndims_f(file_space, ndims, status)
+    allocate(dims(ndims), maxdims(ndims))
+    if (ndims > 0) call h5sget_simple_extent_dims_f(file_space, dims, maxdims, status)
+    if (status >= 0) then
+      if (ndims == 0) then
+        allocate(buffer(value_bytes))
+        destination = c_loc(buffer)
+        call h5dread_f(dataset, stored_type, destination, status)
+      else if (product(dims) == 0) then
+        status = 0
+      else
+        count = dims
+        count(ndims) = 1
+        start = 0 * dims
+        plane = product(count)
+        allocate(buffer(plane * value_bytes))
+        destination = c_loc(buffer)
+        call h5screate_simple_f(ndims, count, memory_space, status)
+        do k = 0, dims(ndims) - 1
+          start(ndims) = k
+          call h5sselect_hyperslab_f(file_space, H5S_SELECT_SET_F, start, count, status)
+          if (status < 0) exit
+          call h5dread_f(dataset, stored_type, destination, status, memory_space, file_space)
+          if (status < 0) exit
+        end do
+        call h5sclose_f(memory_space, closed)
+      end if
+    end if
+    if (status >= 0) ok = .true.
+    if (ok) reason = ''
+    call h5sclose_f(file_space, closed)
+    call h5tclose_f(stored_type, closed)
+    call h5dclose_f(dataset, closed)
+  end subroutine verify_dataset
 end module hdf5_io
