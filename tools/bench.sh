@@ -68,9 +68,10 @@ echo
 echo "One quiescent paper-protocol run (seed 1, 1 rank): shape fidelity steps wall_s us/step outcome"
 for deck in input/quiescent_{needle,disk,sphere}_{none,stokes}.nml; do
   name=$(basename "$deck" .nml)
-  sed -e "s|^  name = .*|  name = 'bench'|" "$deck" > "$work/$name.nml"
-  (cd "$work" && mpirun -np 1 "$agglo" "$name.nml" > "$name.log" 2>&1)
-  python3 - "$work/output/bench/summary.json" "$name" <<'PY'
+  # Each run in a directory of its own (an earlier run is never overwritten).
+  deck_path=$PWD/$deck
+  (cd "$work" && mpirun -np 1 "$agglo" "$deck_path" --set "run.name='$name'" > "$name.log" 2>&1)
+  python3 - "$work/output/$name/summary.json" "$name" <<'PY'
 import json, sys
 d = json.load(open(sys.argv[1]))
 print(f"{sys.argv[2]:28s} {d['steps']:7d} {d['wall_time']:7.2f} {1e6 * d['wall_time'] / d['steps']:6.1f} {d['outcome']}")
