@@ -148,11 +148,18 @@ contains
   !> Add name to the manifest if it is new (rank 0), rewriting the manifest file.
   subroutine record(name)
     character(len=*), intent(in) :: name
-    character(len=name_length), allocatable :: grown(:)
     if (len(name) == 0 .or. .not. allocated(recorded)) return
     if (len(name) > name_length) call fatal('run_directory: file name longer than '// &
                                             limit_text(name_length)//' characters: '//name, collective=.false.)
     if (any(recorded(1:n_recorded) == name)) return
+    call append_recorded(name)
+    call write_manifest()
+  end subroutine record
+
+  !> One more name in the in-memory list (grown by doubling).
+  subroutine append_recorded(name)
+    character(len=*), intent(in) :: name
+    character(len=name_length), allocatable :: grown(:)
     if (n_recorded == size(recorded)) then
       allocate(grown(2 * size(recorded)))
       grown(1:n_recorded) = recorded(1:n_recorded)
@@ -160,8 +167,7 @@ contains
     end if
     n_recorded = n_recorded + 1
     recorded(n_recorded) = name
-    call write_manifest()
-  end subroutine record
+  end subroutine append_recorded
 
   !> The manifest file, written to a temporary name and renamed (never a torn list).
   subroutine write_manifest()
@@ -182,7 +188,6 @@ contains
   subroutine read_manifest()
     integer :: unit, ios
     character(len=name_length) :: line
-    character(len=name_length), allocatable :: grown(:)
     n_recorded = 0
     open(newunit=unit, file=directory//'/'//manifest_name, status='old', action='read', iostat=ios)
     if (ios /= 0) return
@@ -190,13 +195,7 @@ contains
       read(unit, '(a)', iostat=ios) line
       if (ios /= 0) exit
       if (len_trim(line) == 0) cycle
-      if (n_recorded == size(recorded)) then
-        allocate(grown(2 * size(recorded)))
-        grown(1:n_recorded) = recorded(1:n_recorded)
-        call move_alloc(grown, recorded)
-      end if
-      n_recorded = n_recorded + 1
-      recorded(n_recorded) = line
+      call append_recorded(line)
     end do
     close(unit)
   end subroutine read_manifest

@@ -20,6 +20,7 @@ program bench_fluid
   use fluid_solver, only: fluid_solver_t, fluid_solver_create, fluid_advance
   use timer_registry, only: timer_seconds, timer_reset_all, timer_breakdown
   use initial_fields, only: set_random_field
+  use sample_statistics, only: median
   implicit none
   type(fluid_solver_t) :: solver
   type(field_snapshot_t) :: snapshot
@@ -98,20 +99,4 @@ contains
     seconds = [timer_seconds(solver%timer_explicit), timer_seconds(solver%timer_poisson), &
                timer_seconds(solver%timer_halo)]
   end function solver_timers
-
-  real(wp) function median(values)
-    real(wp), intent(in) :: values(:)
-    real(wp) :: sorted(size(values)), swap
-    integer :: i, j
-    sorted = values
-    do i = 2, size(sorted)
-      swap = sorted(i); j = i - 1
-      do while (j >= 1)
-        if (sorted(j) <= swap) exit
-        sorted(j + 1) = sorted(j); j = j - 1
-      end do
-      sorted(j + 1) = swap
-    end do
-    median = sorted((size(sorted) + 1) / 2)
-  end function median
 end program bench_fluid

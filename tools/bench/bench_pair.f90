@@ -15,6 +15,7 @@ program bench_pair
   use stokes_resistance, only: stokes_resistance_t, stokes_resistance_of, stokes_loads
   use rigid_body, only: rigid_body_step, integrator_euler
   use parallel_env, only: parallel_start, parallel_stop
+  use sample_statistics, only: median
   implicit none
   integer, parameter :: repeats = 5
   character(len=*), parameter :: parts(5) = [character(len=16) :: 'closest_points', 'dlvo', 'collision_test', &
@@ -83,19 +84,4 @@ contains
     seconds(which, repeat) = seconds(which, repeat) + (now - t0)
     t0 = now
   end subroutine lap
-
-  function median(values) result(m)
-    real(wp), intent(in) :: values(:)
-    real(wp) :: m, sorted(size(values)), swap
-    integer :: a, b
-    sorted = values
-    do a = 1, size(sorted)
-      do b = a + 1, size(sorted)
-        if (sorted(b) < sorted(a)) then
-          swap = sorted(a); sorted(a) = sorted(b); sorted(b) = swap
-        end if
-      end do
-    end do
-    m = sorted((size(sorted) + 1) / 2)
-  end function median
 end program bench_pair

@@ -23,6 +23,7 @@ program bench_stages
   use initial_fields, only: set_random_field
   use config_grid, only: grid_config_t
   use config_fluid, only: fluid_config_t
+  use sample_statistics, only: median
   implicit none
   type(grid_config_t) :: grid_cfg
   type(fluid_config_t) :: fluid_cfg
@@ -149,20 +150,4 @@ contains
     gigabytes_per_second = global_sum(24.0_wp * triad_length) / best * 1.0e-9_wp
     if (scalar < 0) write(*, *) a(1)
   end function triad_bandwidth
-
-  real(wp) function median(values)
-    real(wp), intent(in) :: values(:)
-    real(wp) :: sorted(size(values)), swap
-    integer :: i, j
-    sorted = values
-    do i = 2, size(sorted)
-      swap = sorted(i); j = i - 1
-      do while (j >= 1)
-        if (sorted(j) <= swap) exit
-        sorted(j + 1) = sorted(j); j = j - 1
-      end do
-      sorted(j + 1) = swap
-    end do
-    median = sorted((size(sorted) + 1) / 2)
-  end function median
 end program bench_stages

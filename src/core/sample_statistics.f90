@@ -1,0 +1,27 @@
+!> Order statistics of small samples (benchmark repetitions, timings).
+module sample_statistics
+  use agglo_kinds, only: wp
+  implicit none
+  private
+  public :: median
+
+contains
+
+  !> The median (for an even count the lower of the two middle values), by insertion sort: the
+  !> samples are a few dozen repetitions at most.
+  real(wp) function median(values)
+    real(wp), intent(in) :: values(:)
+    real(wp) :: sorted(size(values)), held
+    integer :: i, j
+    sorted = values
+    do i = 2, size(sorted)
+      held = sorted(i); j = i - 1
+      do while (j >= 1)
+        if (sorted(j) <= held) exit
+        sorted(j + 1) = sorted(j); j = j - 1
+      end do
+      sorted(j + 1) = held
+    end do
+    median = sorted((size(sorted) + 1) / 2)
+  end function median
+end module sample_statistics
