@@ -127,8 +127,14 @@ contains
     character(len=:), allocatable :: text
     character(len=48) :: buffer
     character(len=16) :: form
-    write(form, '(a,i0,a)') '(f0.', decimals, ')'
-    write(buffer, form) x
+    if (decimals <= 0) then
+      write(buffer, '(f0.0)') anint(x)
+      buffer = buffer(1:index(buffer, '.') - 1)      ! 195, not 195.
+      if (len_trim(buffer) == 0 .or. trim(buffer) == '-') buffer = trim(buffer)//'0'
+    else
+      write(form, '(a,i0,a)') '(f0.', decimals, ')'
+      write(buffer, form) x
+    end if
     text = trim(adjustl(buffer))
     if (text(1:1) == '.') then
       text = '0'//text

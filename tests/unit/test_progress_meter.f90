@@ -21,6 +21,8 @@ program test_progress_meter
   call check(fixed_text(0.46_wp, 2) == '0.46', 'leading_zero', fixed_text(0.46_wp, 2))
   call check(fixed_text(-0.05_wp, 2) == '-0.05', 'leading_zero_negative', fixed_text(-0.05_wp, 2))
   call check(fixed_text(12.34_wp, 1) == '12.3', 'fixed_above_one', fixed_text(12.34_wp, 1))
+  call check(fixed_text(195.4_wp, 0) == '195' .and. fixed_text(0.2_wp, 0) == '0', 'no_decimals_no_point', &
+             fixed_text(195.4_wp, 0)//' '//fixed_text(0.2_wp, 0))
 
   ! First report: the caller's seconds per step (0.46 ms) sets the rate; 1000 steps of dt left.
   line = progress_report(meter, 10.0_wp, 400_i8, 1.2598e-2_wp, 8.2968e-5_wp, 0.46e-3_wp, 1000 * 8.2968e-5_wp)
