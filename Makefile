@@ -89,11 +89,12 @@ deps: ## install the Debian packages Agglo needs (only those missing)
 	  dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q 'install ok installed' || missing="$$missing $$p"; \
 	done; \
 	if [ -n "$$missing" ]; then \
-	  echo "deps: installing$$missing"; \
+	  howto="run as root: apt-get update && apt-get install -y$$missing (then make again)"; \
 	  if [ "$$(id -u)" = 0 ]; then SUDO=""; elif command -v sudo >/dev/null; then SUDO=sudo; else \
-	    echo "deps: missing Debian packages:$$missing; run as root: apt-get install -y$$missing" >&2; exit 1; fi; \
+	    echo "deps: missing Debian packages:$$missing; not root and no sudo: $$howto" >&2; exit 1; fi; \
+	  echo "deps: installing$$missing$${SUDO:+ with sudo}"; \
 	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq $$missing >/dev/null \
-	    || { echo "deps: apt-get could not install:$$missing" >&2; exit 1; }; \
+	    || { echo "deps: apt-get could not install:$$missing; $$howto" >&2; exit 1; }; \
 	fi
 
 build: $(BUILD)/agglo ## build build/agglo (out of source)
