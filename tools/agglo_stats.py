@@ -291,7 +291,8 @@ class FewSamples:
             notes.setdefault(id(axis), (axis, []))[1].append(text)
         for axis, texts in notes.values():
             axis.text(0.02, 0.98, f"few samples (< {FEW_SAMPLES}): " + "; ".join(texts),
-                      transform=axis.transAxes, ha="left", va="top", fontsize=6, color="C3")
+                      transform=axis.transAxes, ha="left", va="top", fontsize=6, color="C3",
+                      bbox={"facecolor": "white", "alpha": 0.8, "edgecolor": "none", "pad": 1.0})
         self._pending = []
 
     def messages(self):
