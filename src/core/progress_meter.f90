@@ -120,14 +120,18 @@ contains
     text = trim(adjustl(buffer))
   end function scientific_text
 
-  !> x with the given number of decimals and a leading zero (0.46, -0.05, not .46).
+  !> x with the given number of decimals and a leading zero (0.46, -0.05, not .46); from 1e15 on
+  !> (or NaN) as scientific_text.
   pure function fixed_text(x, decimals) result(text)
     real(wp), intent(in) :: x
     integer, intent(in) :: decimals
     character(len=:), allocatable :: text
     character(len=48) :: buffer
     character(len=16) :: form
-    if (decimals <= 0) then
+    if (.not. abs(x) < 1.0e15_wp) then               ! too long for a fixed-point field (or NaN)
+      text = scientific_text(x)
+      return
+    else if (decimals <= 0) then
       write(buffer, '(f0.0)') anint(x)
       buffer = buffer(1:index(buffer, '.') - 1)      ! 195, not 195.
       if (len_trim(buffer) == 0 .or. trim(buffer) == '-') buffer = trim(buffer)//'0'

@@ -21,6 +21,7 @@ program test_progress_meter
   call check(fixed_text(0.46_wp, 2) == '0.46', 'leading_zero', fixed_text(0.46_wp, 2))
   call check(fixed_text(-0.05_wp, 2) == '-0.05', 'leading_zero_negative', fixed_text(-0.05_wp, 2))
   call check(fixed_text(12.34_wp, 1) == '12.3', 'fixed_above_one', fixed_text(12.34_wp, 1))
+  call check(fixed_text(2.0e300_wp, 2) == '2.0000E+300', 'fixed_huge_as_scientific', fixed_text(2.0e300_wp, 2))
   call check(fixed_text(195.4_wp, 0) == '195' .and. fixed_text(0.2_wp, 0) == '0', 'no_decimals_no_point', &
              fixed_text(195.4_wp, 0)//' '//fixed_text(0.2_wp, 0))
 
