@@ -2,13 +2,14 @@
 !>
 !> "step 400  t = 1.2598E-002 s  dt = 8.2968E-005 s<detail>  0.460 ms/step  ETA 17.1s"
 !>
-!> Every number keeps its exponent (three digits: a time of 1e-300 s stays readable) and its
-!> leading zero; the wall time per step is in ms, or in us below 0.01 ms. The ETA follows the recent rate, not the average since the start: the meter keeps
-!> exponentially weighted averages of the wall seconds per simulated second and per step over the
-!> intervals between reports, with half the weight on the latest interval (an interval k reports
-!> old weighs 2^-(k+1)), so after a change of dt the estimate settles within a few reports. The
-!> time left is (simulated time left) x (wall seconds per simulated second), or the steps left to a
-!> step limit x (wall seconds per step) if that is sooner.
+!> Every number keeps its exponent (three digits: a time of 1e-300 s stays readable) and its leading
+!> zero; the wall time per step is in ms, or in us below 0.01 ms. The ETA follows the recent rate,
+!> not the average since the start: the meter keeps exponentially weighted averages of the wall
+!> seconds per simulated second and per step over the intervals between reports, with half the
+!> weight on the latest interval (an interval k reports old weighs 2^-(k+1)), so after a change of
+!> dt the estimate settles within a few reports. The time left is (simulated time left) x (wall
+!> seconds per simulated second), or the steps left to a step limit x (wall seconds per step) if
+!> that is sooner.
 module progress_meter
   use agglo_kinds, only: wp, i8
   use wall_clock, only: format_duration
