@@ -44,9 +44,13 @@ CFLAGS := -O2 -I/usr/include/hypre
 FLAGS_STAMP := $(BUILD)/flags.txt
 BUILD_FLAGS := $(FC) $(FFLAGS) $(STENCIL_FLAGS) $(CC) $(CFLAGS)
 ifneq ($(filter-out help clean deps tools-deps,$(MAKECMDGOALS)),)
-  $(shell mkdir -p $(BUILD) && { [ "$$(cat $(FLAGS_STAMP) 2>/dev/null)" = "$(BUILD_FLAGS)" ] \
-            || echo "$(BUILD_FLAGS)" > $(FLAGS_STAMP); })
+  ifeq ($(findstring n,$(firstword -$(MAKEFLAGS))),)   # not under make -n
+    $(shell mkdir -p $(BUILD) && { [ "$$(cat $(FLAGS_STAMP) 2>/dev/null)" = "$(BUILD_FLAGS)" ] \
+              || echo "$(BUILD_FLAGS)" > $(FLAGS_STAMP); })
+  endif
 endif
+$(FLAGS_STAMP):
+	@mkdir -p $(@D) && echo "$(BUILD_FLAGS)" > $@
 LIBS := -L$(HDF5_LIB) -Wl,-rpath,$(HDF5_LIB) -lhdf5_fortran -lhdf5 -lfftw3_mpi -lfftw3 -lHYPRE -llapack -lblas
 
 SRC_DIRS := $(shell find src -type d)
