@@ -1,9 +1,12 @@
 # Agglo build, run and test. `make help` lists the targets.
 # MODE=release (default) or MODE=debug; NP = ranks for `make run`.
+# ARCH = the -march of a release build: native (default, this CPU) or e.g. x86-64-v3 for a build
+# that runs on every AVX2 node of a mixed cluster. Use another BUILD directory per ARCH.
 SHELL := /bin/bash
 .DEFAULT_GOAL := help
 
 MODE  ?= release
+ARCH  ?= native
 NP    ?= 2
 BUILD ?= build
 DECK  ?= input/default.nml
@@ -20,22 +23,34 @@ COMMON_FLAGS := -fwrapv -fimplicit-none -ffree-line-length-132
 ifeq ($(MODE),debug)
   MODE_FLAGS := -O0 -g -fcheck=all -ffpe-trap=invalid,zero,overflow -Wall -fbacktrace
 else ifeq ($(MODE),release)
-  MODE_FLAGS := -O3 -march=native -funroll-loops
+  MODE_FLAGS := -O3 -march=$(ARCH) -funroll-loops
 else
   $(error MODE must be release or debug, not '$(MODE)')
 endif
 OBJ := $(BUILD)/obj
 MOD := $(BUILD)/mod
 # The fluid stencils (momentum_terms) are arithmetic-bound, not memory-bound: where the CPU has
-# AVX-512, 512-bit vectors (GCC prefers 256-bit by default) make the predictor sweep about 1.6x
+# AVX-512 (in the ARCH the build targets), 512-bit vectors (GCC prefers 256-bit by default) make the predictor sweep about 1.6x
 # faster at 128^3 (docs/performance.md, Fluid). Same arithmetic per point, so the same results.
 ifeq ($(MODE),release)
-  ifneq ($(shell $(FC) -march=native -Q --help=target 2>/dev/null | grep -E '^[[:space:]]+-mavx512f[[:space:]]+\[enabled\]'),)
+  ifneq ($(shell $(FC) -march=$(ARCH) -Q --help=target 2>/dev/null | grep -E '^[[:space:]]+-mavx512f[[:space:]]+\[enabled\]'),)
     STENCIL_FLAGS := -mprefer-vector-width=512
   endif
 endif
 FFLAGS := $(COMMON_FLAGS) $(MODE_FLAGS) -J$(MOD) -I$(MOD) -I/usr/include -I$(HDF5_INC)
 CFLAGS := -O2 -I/usr/include/hypre
+# Objects depend on a file holding the flags, rewritten only when they change: a BUILD directory
+# built with another MODE or ARCH is rebuilt whole, never linked from a mix of both.
+FLAGS_STAMP := $(BUILD)/flags.txt
+BUILD_FLAGS := $(FC) $(FFLAGS) $(STENCIL_FLAGS) $(CC) $(CFLAGS)
+ifneq ($(filter-out help clean deps tools-deps,$(MAKECMDGOALS)),)
+  ifeq ($(findstring n,$(firstword -$(MAKEFLAGS))),)   # not under make -n
+    $(shell mkdir -p $(BUILD) && { [ "$$(cat $(FLAGS_STAMP) 2>/dev/null)" = "$(BUILD_FLAGS)" ] \
+              || echo "$(BUILD_FLAGS)" > $(FLAGS_STAMP); })
+  endif
+endif
+$(FLAGS_STAMP):
+	@mkdir -p $(@D) && echo "$(BUILD_FLAGS)" > $@
 LIBS := -L$(HDF5_LIB) -Wl,-rpath,$(HDF5_LIB) -lhdf5_fortran -lhdf5 -lfftw3_mpi -lfftw3 -lHYPRE -llapack -lblas
 
 SRC_DIRS := $(shell find src -type d)
@@ -70,7 +85,7 @@ endif
 .PHONY: help deps build run test bench clean tools-deps
 .SECONDARY:
 help: ## list the targets
-	@echo "Agglo - make targets (MODE=release|debug, NP=ranks, DECK=deck for run):"
+	@echo "Agglo - make targets (MODE=release|debug, ARCH=native|x86-64-v3|..., BUILD=dir, NP=ranks, DECK=deck for run):"
 	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | sed -E 's/^([a-z-]+):.*## (.*)/  make \1\t\2/' | expand -t 20
 
 deps: ## install the Debian packages Agglo needs (only those missing)
@@ -78,11 +93,12 @@ deps: ## install the Debian packages Agglo needs (only those missing)
 	  dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q 'install ok installed' || missing="$$missing $$p"; \
 	done; \
 	if [ -n "$$missing" ]; then \
-	  echo "deps: installing$$missing"; \
+	  howto="run as root: apt-get update && apt-get install -y$$missing (then make again)"; \
 	  if [ "$$(id -u)" = 0 ]; then SUDO=""; elif command -v sudo >/dev/null; then SUDO=sudo; else \
-	    echo "deps: missing Debian packages:$$missing; run as root: apt-get install -y$$missing" >&2; exit 1; fi; \
+	    echo "deps: missing Debian packages:$$missing; not root and no sudo: $$howto" >&2; exit 1; fi; \
+	  echo "deps: installing$$missing$${SUDO:+ with sudo}"; \
 	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq $$missing >/dev/null \
-	    || { echo "deps: apt-get could not install:$$missing" >&2; exit 1; }; \
+	    || { echo "deps: apt-get could not install:$$missing; $$howto" >&2; exit 1; }; \
 	fi
 
 build: $(BUILD)/agglo ## build build/agglo (out of source)
@@ -94,12 +110,12 @@ $(BUILD)/libagglo.a: $(LIB_OBJECTS)
 	@rm -f $@
 	$(Q)ar rcs $@ $^
 
-$(OBJ)/%.o: %.f90 | $(OBJ) $(MOD)
+$(OBJ)/%.o: %.f90 $(FLAGS_STAMP) | $(OBJ) $(MOD)
 	$(Q)$(FC) $(FFLAGS) -c $< -o $@
 
 $(OBJ)/momentum_terms.o: private FFLAGS += $(STENCIL_FLAGS)
 
-$(OBJ)/%.o: %.c | $(OBJ)
+$(OBJ)/%.o: %.c $(FLAGS_STAMP) | $(OBJ)
 	$(Q)$(CC) $(CFLAGS) -c $< -o $@
 
 $(BUILD)/tests/%: $(OBJ)/%.o $(TEST_SUPPORT_OBJECTS) $(BUILD)/libagglo.a | $(BUILD)/tests

@@ -5,11 +5,17 @@
 #  - tests/**/test_*.sh: shell tests (decks, restart, MPI comparisons); they print PASS/FAIL lines.
 #  - tests/python: pytest for the tools, reported line by line.
 # TESTS=pattern runs only the tests whose name matches the pattern.
+# BUILD = the build directory (default build), relative to the repository or absolute.
 set -u
 cd "$(dirname "$0")/.."
 BUILD=${BUILD:-build}
+if [ ! -d "$BUILD" ]; then
+  echo "run_tests: no build directory '$BUILD': run 'make test' (or 'make build' with the same BUILD=)" >&2
+  exit 1
+fi
+BUILD=$(cd "$BUILD" && pwd -P)   # absolute from here on: the programs run from the log directory
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
-export AGGLO=$PWD/$BUILD/agglo BUILD
+export AGGLO=$BUILD/agglo BUILD
 pattern=${TESTS:-.}
 passed=0; failed=0
 log_dir=$BUILD/test-logs; mkdir -p "$log_dir"
@@ -26,13 +32,14 @@ tally() { # name, log file, exit status
   passed=$((passed + p)); failed=$((failed + f))
 }
 
-for exe in $(ls "$BUILD"/tests/test_* 2>/dev/null | sort); do
+for exe in "$BUILD"/tests/test_*; do   # glob order is sorted
+  [ -x "$exe" ] || continue
   name=$(basename "$exe")
   [[ $name =~ $pattern ]] || continue
   src=$(find tests -name "$name.f90" | head -n 1)
   ranks=$(sed -n 's/^! *ranks: *\([0-9]*\).*/\1/p' "$src" | head -n 1); ranks=${ranks:-1}
   t0=$(date +%s)
-  (cd "$log_dir" && mpirun -np "$ranks" "../../$exe") > "$log_dir/$name.log" 2>&1; status=$?
+  (cd "$log_dir" && mpirun -np "$ranks" "$exe") > "$log_dir/$name.log" 2>&1; status=$?
   tally "$name" "$log_dir/$name.log" $status
   echo "  ($name: $ranks rank(s), $(( $(date +%s) - t0 )) s)"
 done

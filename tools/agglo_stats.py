@@ -12,6 +12,7 @@ import csv
 import json
 import math
 import os
+import re
 import sys
 
 OUTCOMES = ("agglomerated", "rebounded", "no_contact")
@@ -23,6 +24,14 @@ SUMMARY_KEYS = ("name", "seed", "shape", "aspect_ratio", "fluid", "outcome", "co
 FIRST_COLLISION_KEYS = ("time", "theta1", "phi1", "theta2", "phi2", "psi",
                         "normal_velocity_before", "normal_velocity_after")
 RUN_MARKERS = ("summary.json", "run.nml", "deck.nml", "agglo.log", "particles.h5", "FAILED")
+# Files of a resolved-fluid run (decaying or forced box, docs/outputs.md): not a pair scene.
+FLUID_MARKERS = ("fields.xdmf", "fluid_statistics.dat", "flow_statistics.h5")
+# A PDF estimated from fewer samples than this shows the noise of the sample more than the shape
+# (each of 10 bins then holds about 3 samples, a relative error of about 1/sqrt(3) = 60%).
+FEW_SAMPLES = 30
+# &collision detection_floor when run.nml does not give it (the code's default, docs/decks.md).
+DEFAULT_DETECTION_FLOOR = 1.0e-9
+_DETECTION_FLOOR = re.compile(r"detection_floor\s*=\s*([-+0-9.]+(?:[eEdD][-+]?[0-9]+)?)", re.I)
 
 
 class BatchError(Exception):
@@ -60,6 +69,25 @@ class Run:
     def label(self):
         return f"{os.path.basename(self.batch)}/{os.path.basename(self.directory)}"
 
+    @property
+    def detection_floor(self):
+        """&collision detection_floor (m) of the run, from its run.nml; the default without one."""
+        try:
+            with open(os.path.join(self.directory, "run.nml")) as handle:
+                match = _DETECTION_FLOOR.search(handle.read())
+        except OSError:
+            match = None
+        if match is None:
+            return DEFAULT_DETECTION_FLOOR
+        return float(match.group(1).replace("d", "e").replace("D", "e"))
+
+
+def is_fluid_run(directory):
+    """A resolved-fluid run directory: fluid outputs and no pair-scene outputs."""
+    def has(name):
+        return os.path.exists(os.path.join(directory, name))
+    return any(has(m) for m in FLUID_MARKERS) and not (has("summary.json") or has("particles.h5"))
+
 
 def _check_summary(summary):
     """The reason a summary is unusable, or '' when it follows the agreed layout."""
@@ -82,12 +110,13 @@ def find_run_directories(root):
     sub-directories that hold any run file (RUN_MARKERS)."""
     if not os.path.isdir(root):
         raise BatchError(f"batch root '{root}' is not a directory")
-    if any(os.path.exists(os.path.join(root, marker)) for marker in RUN_MARKERS):
+    markers = RUN_MARKERS + FLUID_MARKERS
+    if any(os.path.exists(os.path.join(root, marker)) for marker in markers):
         return [root]
     runs = []
     for entry in sorted(os.listdir(root)):
         path = os.path.join(root, entry)
-        if os.path.isdir(path) and any(os.path.exists(os.path.join(path, m)) for m in RUN_MARKERS):
+        if os.path.isdir(path) and any(os.path.exists(os.path.join(path, m)) for m in markers):
             runs.append(path)
     return runs
 
@@ -103,6 +132,11 @@ def load_runs(roots):
                              f"{', '.join(RUN_MARKERS)}): is it the output root of a batch?")
         for directory in directories:
             path = os.path.join(directory, "summary.json")
+            if is_fluid_run(directory):
+                skipped.append((directory, "a resolved-fluid run (" + ", ".join(
+                    m for m in FLUID_MARKERS if os.path.exists(os.path.join(directory, m)))
+                    + "), not a pair scene"))
+                continue
             if os.path.exists(os.path.join(directory, "FAILED")):
                 skipped.append((directory, "failed (see its FAILED file)"))
                 continue
@@ -120,9 +154,16 @@ def load_runs(roots):
                 skipped.append((directory, reason))
                 continue
             complete.append(Run(directory, root, summary))
+    fluid = [directory for directory, reason in skipped if reason.startswith("a resolved-fluid run")]
+    if not complete and fluid and len(fluid) == len(skipped):
+        raise BatchError(
+            f"{', '.join(fluid[:3])}{' ...' if len(fluid) > 3 else ''}: resolved-fluid run(s) "
+            f"({', '.join(FLUID_MARKERS)}), not pair-scene runs; agglo-stats reads the summary.json "
+            "and particles.h5 of pair scenes. A fluid run's time series is fluid_statistics.dat "
+            "(and flow_statistics.h5 when forced); open fields.xdmf in ParaView (docs/outputs.md)")
     if not complete:
         raise BatchError(f"no complete run in {', '.join(roots)}: {len(skipped)} run(s), all "
-                         "incomplete or failed (a complete run has summary.json)")
+                         "incomplete, failed or not pair scenes (a complete run has summary.json)")
     return complete, skipped
 
 
@@ -218,7 +259,7 @@ def _pdf_line(axis, values, bins, label, log_bins=False, color=None, style="-"):
     values = np.asarray(values, dtype=float)
     values = values[np.isfinite(values)]
     if values.size == 0:
-        return False
+        return 0
     if log_bins:
         # Density per unit log10 of the quantity, drawn against the quantity on a log axis.
         density, edges = np.histogram(np.log10(values), bins=np.log10(bins), density=True)
@@ -226,7 +267,80 @@ def _pdf_line(axis, values, bins, label, log_bins=False, color=None, style="-"):
     else:
         density, edges = np.histogram(values, bins=bins, density=True)
     axis.stairs(density, edges, label=f"{label} (n = {values.size})", color=color, linestyle=style)
-    return True
+    return values.size
+
+
+class FewSamples:
+    """The PDF lines drawn from fewer than FEW_SAMPLES samples: each such panel gets a visible
+    note, and messages() gives one line per figure for the user (main prints them)."""
+
+    def __init__(self):
+        self._by_figure = {}
+        self._pending = []
+
+    def count(self, axis, figure_stem, panel, label, n):
+        if 0 < n < FEW_SAMPLES:
+            self._pending.append((axis, f"{label} n = {n}"))
+            name = f"{panel} {label}" if panel else label
+            self._by_figure.setdefault(figure_stem, []).append(f"{name} {n}")
+
+    def annotate(self):
+        """Write the note on every panel counted since the last call."""
+        notes = {}
+        for axis, text in self._pending:
+            notes.setdefault(id(axis), (axis, []))[1].append(text)
+        for axis, texts in notes.values():
+            axis.text(0.02, 0.98, f"few samples (< {FEW_SAMPLES}): " + "; ".join(texts),
+                      transform=axis.transAxes, ha="left", va="top", fontsize=6, color="C3",
+                      bbox={"facecolor": "white", "alpha": 0.8, "edgecolor": "none", "pad": 1.0})
+        self._pending = []
+
+    def messages(self):
+        return [f"{stem}: {len(items)} PDF(s) from fewer than {FEW_SAMPLES} samples show the "
+                f"sample's noise more than a shape: {', '.join(items)}"
+                for stem, items in self._by_figure.items()]
+
+
+def label_log_ends(axis, which="x"):
+    """Label both ends of a log axis: major ticks at its two limits, plus the decades between
+    that are not crowding an end (matplotlib alone may label one decade, or none, of a range
+    spanning less than two). Returns the tick values."""
+    from matplotlib.ticker import FixedLocator, FuncFormatter, NullFormatter
+    target = axis.xaxis if which == "x" else axis.yaxis
+    limits = axis.get_xlim() if which == "x" else axis.get_ylim()
+    low, high = sorted(limits)
+    if not (low > 0.0 and high > low and math.isfinite(high)):
+        return []
+    first, last = math.log10(low), math.log10(high)
+    # Room one label takes, as a share of the axis: about 14% of a 6-inch-wide x axis for a label
+    # like 5.91e-10, about 6% of a 4-inch-tall y axis.
+    room = (0.14 if which == "x" else 0.06) * (last - first)
+    decades = [k for k in range(math.ceil(first), math.floor(last) + 1)
+               if k - first > room and last - k > room]
+    stride = max(1, math.ceil(room))                       # inner labels at least room apart
+    ticks = [low] + [10.0 ** k for k in decades[::stride]] + [high]
+    (axis.set_xlim if which == "x" else axis.set_ylim)(*limits)
+    target.set_major_locator(FixedLocator(ticks))
+    target.set_major_formatter(FuncFormatter(lambda value, _: f"{value:.3g}"))
+    target.set_minor_formatter(NullFormatter())
+    return ticks
+
+
+def mark_detection_floor(axis, floors, gaps):
+    """A dashed line at each collision detection floor with the share of the gap samples within
+    10% of it (pairs in contact sit at the floor: the PDF's tallest peak is that, not a physical
+    separation). Returns one description per floor."""
+    import numpy as np
+    every = np.concatenate([np.asarray(g, float) for g in gaps]) if gaps else np.empty(0)
+    every = every[np.isfinite(every) & (every > 0.0)]
+    notes = []
+    for floor in floors:
+        near = np.mean((every >= floor / 1.1) & (every <= floor * 1.1)) * 100.0 if every.size else 0.0
+        text = f"detection floor {floor * 1e9:.3g} nm: {near:.0f}% of the samples within 10%"
+        axis.axvline(floor, color="k", linestyle="--", linewidth=0.8, label=text)
+        axis.axvspan(floor / 1.1, floor * 1.1, color="0.85", zorder=0)
+        notes.append(text)
+    return notes
 
 
 def _legend_or_note(axis, note="no data"):
@@ -248,8 +362,10 @@ def _log_bins(values, count=40):
     return np.logspace(np.log10(low), np.log10(high), count + 1)
 
 
-def make_figures(runs, groups, directory, history_runs):
-    """Write every figure as PNG and PDF into directory; returns the paths written."""
+def make_figures(runs, groups, directory, history_runs, notes=None):
+    """Write every figure as PNG and PDF into directory; returns the paths written. notes (a
+    list), when given, receives what the user should know about the figures (small samples, the
+    detection floor)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -259,6 +375,7 @@ def make_figures(runs, groups, directory, history_runs):
     outcome_style = {"agglomerated": ("C3", "-"), "rebounded": ("C0", "--"),
                      "no_contact": ("C7", ":")}
     written = []
+    few = FewSamples()
 
     # 1-2. PDFs of surface separation and relative velocity over the runs' histories.
     histories = {group: [] for group in groups}
@@ -276,13 +393,20 @@ def make_figures(runs, groups, directory, history_runs):
         if bins is None or gaps[group].size == 0:
             continue
         overlap = np.mean(gaps[group] <= 0.0) * 100.0
-        _pdf_line(axis, gaps[group][gaps[group] > 0.0], bins,
-                  f"{group}, overlap {overlap:.1f}% of samples", log_bins=True, color=colours[group])
+        n = _pdf_line(axis, gaps[group][gaps[group] > 0.0], bins,
+                      f"{group}, overlap {overlap:.1f}% of samples", log_bins=True, color=colours[group])
+        few.count(axis, "separation_pdf", "", group, n)
+    floor_notes = []
+    if bins is not None:
+        floor_notes = mark_detection_floor(axis, sorted({run.detection_floor for run in runs}),
+                                           [gaps[group] for group in groups])
     axis.set_xscale("log")
     axis.set_xlabel("surface separation h (m)")
     axis.set_ylabel("PDF of log10 h")
     axis.set_title("Surface separation over the runs' histories")
     _legend_or_note(axis, "no particles.h5 histories")
+    label_log_ends(axis, "x")
+    few.annotate()
     written += _save(figure, directory, "separation_pdf")
     plt.close(figure)
 
@@ -291,12 +415,15 @@ def make_figures(runs, groups, directory, history_runs):
     if every.size:
         bins = np.linspace(every.min(), every.max() if every.max() > every.min() else every.min() + 1, 61)
         for group in groups:
-            _pdf_line(axis, velocities[group] * 1.0e3, bins, group, color=colours[group])
+            n = _pdf_line(axis, velocities[group] * 1.0e3, bins, group, color=colours[group])
+            few.count(axis, "relative_velocity_pdf", "", group, n)
     axis.set_yscale("log")
     axis.set_xlabel("normal relative velocity of the closest points (mm/s, > 0 approaching)")
     axis.set_ylabel("PDF (s/mm)")
     axis.set_title("Relative velocity over the runs' histories")
     _legend_or_note(axis, "no particles.h5 histories")
+    label_log_ends(axis, "y")
+    few.annotate()
     written += _save(figure, directory, "relative_velocity_pdf")
     plt.close(figure)
 
@@ -307,13 +434,16 @@ def make_figures(runs, groups, directory, history_runs):
     bins = _log_bins(list(forces.values()), count=20)
     if bins is not None:
         for group in groups:
-            _pdf_line(axis, forces[group][forces[group] > 0.0], bins, group, log_bins=True,
-                      color=colours[group])
+            n = _pdf_line(axis, forces[group][forces[group] > 0.0], bins, group, log_bins=True,
+                          color=colours[group])
+            few.count(axis, "max_vdw_force_pdf", "", group, n)
     axis.set_xscale("log")
     axis.set_xlabel("maximum van der Waals force of a run (N)")
     axis.set_ylabel("PDF of log10 F")
     axis.set_title("Maximum van der Waals force")
     _legend_or_note(axis, "no positive force")
+    label_log_ends(axis, "x")
+    few.annotate()
     written += _save(figure, directory, "max_vdw_force_pdf")
     plt.close(figure)
 
@@ -326,13 +456,15 @@ def make_figures(runs, groups, directory, history_runs):
                    if r.group == group and r.summary["outcome"] == outcome
                    and r.summary["first_collision"] is not None]
             colour, style = outcome_style[outcome]
-            _pdf_line(axis, psi, bins, outcome, color=colour, style=style)
+            n = _pdf_line(axis, psi, bins, outcome, color=colour, style=style)
+            few.count(axis, "psi_pdf", group, outcome, n)
         axis.set_title(group)
         axis.set_xlabel("psi at the first collision (rad)")
         axis.set_xlim(0.0, 0.5 * math.pi)
         _legend_or_note(axis, "no collision in this group")
     axes[0][0].set_ylabel("PDF (1/rad)")
     figure.suptitle("Angle between the symmetry axes at contact")
+    few.annotate()
     written += _save(figure, directory, "psi_pdf")
     plt.close(figure)
 
@@ -349,12 +481,14 @@ def make_figures(runs, groups, directory, history_runs):
                     if r.group == group and r.summary["outcome"] == outcome and first is not None:
                         values += [first[angle + "1"], first[angle + "2"]]
                 colour, style = outcome_style[outcome]
-                _pdf_line(axis, values, bins, outcome, color=colour, style=style)
+                n = _pdf_line(axis, values, bins, outcome, color=colour, style=style)
+                few.count(axis, "collision_points_pdf", f"{group} {angle}", outcome, n)
             axis.set_xlabel(f"{angle} of the first collision point (rad), both particles")
             axis.set_ylabel(f"{group}: PDF (1/rad)")
             _legend_or_note(axis, "no collision in this group")
     figure.suptitle("Collision points on the unrotated spheroid surfaces")
     figure.tight_layout()
+    few.annotate()
     written += _save(figure, directory, "collision_points_pdf")
     plt.close(figure)
 
@@ -384,6 +518,9 @@ def make_figures(runs, groups, directory, history_runs):
     top.set_title("Histories of chosen runs")
     written += _save(figure, directory, "histories")
     plt.close(figure)
+    if notes is not None:
+        notes += [f"separation_pdf: {text}" for text in floor_notes]
+        notes += [f"warning: {text}" for text in few.messages()]
     return written
 
 
@@ -463,7 +600,10 @@ def main(argv=None):
         print(f"wrote {os.path.join(out, 'runs.csv')} ({len(runs)} runs) and {os.path.join(out, 'rates.csv')}")
         if not arguments.no_figures:
             history_runs = choose_history_runs(runs, groups, arguments.history)
-            written = make_figures(runs, groups, out, history_runs)
+            notes = []
+            written = make_figures(runs, groups, out, history_runs, notes)
+            for note in notes:
+                print(note)
             print(f"wrote {len(written)} figure files in {out}")
     except BatchError as error:
         sys.stderr.write(f"agglo-stats: error: {error}\n")

@@ -1,10 +1,15 @@
 !> Numbers as text for messages, the log and text outputs: one place, so every message and file
 !> formats a value the same way.
 module text_format
-  use agglo_kinds, only: wp
+  use agglo_kinds, only: wp, i8
   implicit none
   private
   public :: real_text, exact_real_text, int_text
+
+  !> An integer (default or 64-bit) without blanks.
+  interface int_text
+    module procedure int_text_default, int_text_long
+  end interface int_text
 
 contains
 
@@ -30,12 +35,19 @@ contains
     text = trim(adjustl(buffer))
   end function exact_real_text
 
-  !> An integer without blanks.
-  function int_text(value) result(text)
+  pure function int_text_default(value) result(text)
     integer, intent(in) :: value
     character(len=:), allocatable :: text
     character(len=16) :: buffer
     write(buffer, '(i0)') value
     text = trim(buffer)
-  end function int_text
+  end function int_text_default
+
+  pure function int_text_long(value) result(text)
+    integer(i8), intent(in) :: value
+    character(len=:), allocatable :: text
+    character(len=24) :: buffer
+    write(buffer, '(i0)') value
+    text = trim(buffer)
+  end function int_text_long
 end module text_format

@@ -4,7 +4,8 @@ module fluid_monitor
   use agglo_kinds, only: wp, i8
   use logger, only: log_line
   use parallel_env, only: is_root
-  use wall_clock, only: format_duration
+  use wall_clock, only: wall_time
+  use progress_meter, only: progress_meter_t, progress_report
   use error_handling, only: fatal
   use file_system, only: rename_file
   use fluid_diagnostics, only: fluid_statistics_t
@@ -14,6 +15,7 @@ module fluid_monitor
   public :: statistics_open, statistics_write, statistics_close, progress_line, timing_report
 
   integer :: statistics_unit = -1
+  type(progress_meter_t) :: meter
 
 contains
 
@@ -82,14 +84,12 @@ contains
     statistics_unit = -1
   end subroutine statistics_close
 
-  !> "step 120  t = 1.2000E-03 s  dt = 1.0000E-05 s  3.21 ms/step  ETA 12.0s"
+  !> "step 120  t = 1.2000E-003 s  dt = 1.0000E-005 s  3.21 ms/step  ETA 12.0s" (core progress_meter:
+  !> the ETA follows the recent rate of simulated time; steps_left x dt is the simulated time left).
   subroutine progress_line(step, time, dt, seconds_per_step, steps_left)
     integer(i8), intent(in) :: step
     real(wp), intent(in) :: time, dt, seconds_per_step, steps_left
-    character(len=160) :: line
-    write(line, '(a,i0,a,es11.4,a,es11.4,a,f0.2,a)') 'step ', step, '  t = ', time, ' s  dt = ', dt, ' s  ', &
-        1.0e3_wp * seconds_per_step, ' ms/step  ETA '
-    call log_line(trim(line)//' '//trim(format_duration(seconds_per_step * steps_left)))
+    call log_line(progress_report(meter, wall_time(), step, time, dt, seconds_per_step, steps_left * dt, steps_left))
   end subroutine progress_line
 
   !> Milliseconds per step of every registered timer and of the whole step: min / mean / max over

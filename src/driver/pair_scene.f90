@@ -11,7 +11,8 @@ module pair_scene
   use agglo_kinds, only: wp, i8
   use agglo_config, only: agglo_config_t
   use logger, only: log_line
-  use wall_clock, only: wall_time, format_duration
+  use wall_clock, only: wall_time
+  use progress_meter, only: progress_meter_t, progress_report, scientific_text
   use run_directory, only: run_file
   use pair_setup, only: pair_t, build_pair
   use rigid_body, only: integrator_code, angular_velocity_lab
@@ -216,19 +217,15 @@ contains
     end associate
   end function normal_approach_speed
 
+  !> The progress line (core progress_meter) with the pair's gap and normal approach speed.
   subroutine progress_line(step, time, dt, end_time, system, elapsed)
     integer(i8), intent(in) :: step
     real(wp), intent(in) :: time, dt, end_time, elapsed
     type(particle_system_t), intent(in) :: system
-    character(len=200) :: line
-    real(wp) :: per_step, remaining_steps
-    per_step = elapsed / real(step, wp)
-    remaining_steps = max(end_time - time, 0.0_wp) / dt
-    write(line, '(a,i9,a,es11.4,a,es9.2,a,es11.4,a,es10.3,a,es9.2,a,a)') 'step ', step, '  t = ', time, ' s  dt = ', dt, &
-        '  gap = ', system%pairs(the_pair)%contact%gap, ' m  v_n = ', normal_approach_speed(system, the_pair), &
-        ' m/s  ', per_step, ' s/step  ETA ', &
-        trim(format_duration(per_step * remaining_steps))
-    call log_line(trim(line))
+    type(progress_meter_t), save :: meter
+    call log_line(progress_report(meter, wall_time(), step, time, dt, elapsed / real(step, wp), end_time - time, &
+                                  detail='  gap = '//scientific_text(system%pairs(the_pair)%contact%gap)//' m  v_n = '// &
+                                  scientific_text(normal_approach_speed(system, the_pair))//' m/s'))
   end subroutine progress_line
 
   !> The summary of the finished run; the outcome and whether it was settled (module pair_outcome,

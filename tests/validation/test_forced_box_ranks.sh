@@ -3,7 +3,8 @@
 # velocity on 1 and 2 ranks to 1e-12 relative (docs/validation.md, Forcing): the forcing itself is identical bit for
 # bit on any slab layout (test_eswaran_pope_forcing), the solver's FFT and sums differ by round-off.
 set -u
-exe=$PWD/${BUILD:-build}/tests/test_forced_box
+exe=${BUILD:-build}/tests/test_forced_box
+[[ $exe = /* ]] || exe=$PWD/$exe    # BUILD may be absolute (tests/run_tests.sh passes it so)
 work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
 cd "$work"
 for np in 1 2; do
