@@ -10,15 +10,16 @@ BUILD=${BUILD:-build}
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 make --no-print-directory -s build "$BUILD/bench/bench_fluid" "$BUILD/bench/bench_pair" \
   "$BUILD/bench/bench_forcing" "$BUILD/bench/bench_stages"
+BUILD=$(cd "$BUILD" && pwd -P)   # absolute from here on: the programs run from a work directory
 work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
-exe=$PWD/$BUILD/bench/bench_fluid
-pair_exe=$PWD/$BUILD/bench/bench_pair
-forcing_exe=$PWD/$BUILD/bench/bench_forcing
-stages_exe=$PWD/$BUILD/bench/bench_stages
-agglo=$PWD/$BUILD/agglo
+exe=$BUILD/bench/bench_fluid
+pair_exe=$BUILD/bench/bench_pair
+forcing_exe=$BUILD/bench/bench_forcing
+stages_exe=$BUILD/bench/bench_stages
+agglo=$BUILD/agglo
 parts=${BENCH_PARTS:-fluid stages pair forcing}   # e.g. BENCH_PARTS=pair make bench
 echo "Agglo fluid benchmark on $(nproc) cores: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')"
-echo "compiler: $(mpifort --version | head -n 1); flags: -O3 -march=native -funroll-loops$(grep -q avx512f /proc/cpuinfo && echo ' (momentum_terms: -mprefer-vector-width=512)'); FFTW_ESTIMATE plans"
+echo "compiler: $(mpifort --version | head -n 1); flags: $(cat "$BUILD/flags.txt" 2>/dev/null); FFTW_ESTIMATE plans"
 echo "    N  R  fft_pair   poisson      step  adv+diff   proj(P)      halo    io(4f) pois(copy)  [ms, medians]  ns/pt/step  poisson/fft  step/fft"
 if [[ $parts == *fluid* ]]; then
 for n in 64 128; do
