@@ -1,5 +1,6 @@
 # Agglo build, run and test. `make help` lists the targets.
-# MODE=release (default) or MODE=debug; NP = ranks for `make run`.
+# MODE=release (default) or MODE=debug; NP = ranks, DECK = the deck and ARGS = its command-line
+# overrides (--set group.variable=value) for `make run`.
 # ARCH = the -march of a release build: native (default, this CPU) or e.g. x86-64-v3 for a build
 # that runs on every AVX2 node of a mixed cluster. Use another BUILD directory per ARCH.
 SHELL := /bin/bash
@@ -134,9 +135,9 @@ ifneq ($(filter-out help clean deps tools-deps,$(MAKECMDGOALS)),)
 include $(BUILD)/deps.mk
 endif
 
-run: deps ## install, build, and run DECK (default input/default.nml) on NP ranks
+run: deps ## install, build, and run DECK (default input/default.nml) on NP ranks, with ARGS
 	@$(MAKE) --no-print-directory build
-	$(MPIRUN) -np $(NP) $(BUILD)/agglo $(DECK)
+	$(MPIRUN) -np $(NP) $(BUILD)/agglo $(DECK) $(ARGS)
 
 test: deps tools-deps ## install, build, and run every test (closing line "N passed, N failed")
 	@$(MAKE) --no-print-directory build $(TEST_PROGRAMS)
