@@ -18,6 +18,10 @@ module hypre_fft_preconditioner
     type(poisson_fft_t), pointer :: fft => null()
     real(wp) :: coefficient = 0                    !< c = nu dt / 2
     real(wp), allocatable :: work(:, :, :)         !< one field, allocated once
+    !> Rows the caller replaced (ghost and interior rows of bodies): their correction is the
+    !> Jacobi one, residual / diagonal, instead of the FFT's (none if not allocated).
+    integer, allocatable :: replaced_rows(:)       !< local row numbers
+    real(wp), allocatable :: replaced_diagonal(:)  !< their diagonal entries
   contains
     procedure :: apply => apply_fft_helmholtz
   end type fft_helmholtz_preconditioner_t
@@ -44,5 +48,6 @@ contains
     call rows_to_field(self%grid, residual, self%work)
     call helmholtz_solve(self%fft, self%work, self%coefficient)
     call field_to_rows(self%grid, self%work, correction)
+    if (allocated(self%replaced_rows)) correction(self%replaced_rows) = residual(self%replaced_rows) / self%replaced_diagonal
   end subroutine apply_fft_helmholtz
 end module hypre_fft_preconditioner

@@ -49,6 +49,7 @@ contains
     do v = 1, size(viscous_numbers)
       call check_ghost_rows_all_combinations(v)
     end do
+    call check_fft_preconditioner_with_jacobi_rows()
     call check_same_solution_as_one_rank()
     call check_values_update()
     call check_non_convergence_reported()
@@ -103,6 +104,37 @@ contains
       end do
     end do
   end subroutine check_ghost_rows_all_combinations
+
+  !> The FFT preconditioner with Jacobi on the replaced (ghost) rows, on the ghost system at r = 10.
+  subroutine check_fft_preconditioner_with_jacobi_rows()
+    type(sparse_rows_t) :: rows
+    type(linear_solver_config_t) :: config
+    type(linear_solver_t) :: solver
+    type(solve_status_t) :: status
+    real(wp), allocatable :: rhs(:), exact(:), solution(:)
+    real(wp) :: coefficient
+    integer :: m, row
+    logical, allocatable :: replaced(:)
+    coefficient = 10.0_wp * grid%dx**2 / 2
+    call ghost_system(grid, coefficient, rows, exact, rhs)
+    allocate(solution(size(rhs)))
+    ! Ghost rows are the rows with 8 entries; their diagonal entry is the first.
+    replaced = [(rows%row_start(row + 1) - rows%row_start(row) == 8, row = 1, size(rhs))]
+    do m = 1, size(methods)
+      config = config_of(m, 4)
+      call fft_preconditioner_create(fft_preconditioner, grid, fft, coefficient)
+      fft_preconditioner%replaced_rows = pack([(row, row = 1, size(rhs))], replaced)
+      fft_preconditioner%replaced_diagonal = rows%values(rows%row_start(fft_preconditioner%replaced_rows))
+      call linear_solver_create(solver, rows, config, fft_preconditioner)
+      solution = 0
+      call linear_solver_solve(solver, rhs, solution, status)
+      call linear_solver_destroy(solver)
+      call check(status%converged, 'ghost_rows_'//trim(methods(m))//'_fft_jacobi_rows_converged', &
+                 solve_status_text(status, config))
+      call check_below(relative_error(solution, exact), 1.0e3_wp * tolerance, &
+                       'ghost_rows_'//trim(methods(m))//'_fft_jacobi_rows_error')
+    end do
+  end subroutine check_fft_preconditioner_with_jacobi_rows
 
   !> (c) the distributed solve equals a solve of the whole box on one rank (MPI_COMM_SELF) to the
   !> tolerance: both are within cond tolerance of the same discrete solution.

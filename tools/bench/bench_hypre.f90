@@ -31,7 +31,10 @@ program bench_hypre
   use hypre_fft_preconditioner, only: fft_helmholtz_preconditioner_t, fft_preconditioner_create
   implicit none
   character(len=8), parameter :: methods(2) = [character(len=8) :: 'bicgstab', 'gmres']
-  character(len=9), parameter :: preconditioners(4) = [character(len=9) :: 'boomeramg', 'ilu', 'none', 'user']
+  !> 'user' is the FFT Helmholtz solve; 'user+jac' (sphere only) the same with Jacobi on the
+  !> sphere's rows (fft_helmholtz_preconditioner_t%replaced_rows).
+  character(len=9), parameter :: preconditioners(5) = [character(len=9) :: 'boomeramg', 'ilu', 'none', 'user', &
+                                                       'user+jac']
   real(wp), parameter :: viscous_numbers(3) = [0.5_wp, 2.0_wp, 10.0_wp]
   real(wp), parameter :: sphere_centre(3) = [0.513_wp, 0.497_wp, 0.521_wp]   !< off the grid's symmetry
   real(wp), parameter :: sphere_radius = 0.125_wp
@@ -56,6 +59,7 @@ program bench_hypre
     do v = 1, size(viscous_numbers)
       do m = 1, size(methods)
         do p = 1, size(preconditioners)
+          if (preconditioners(p) == 'user+jac' .and. .not. with_sphere) cycle
           call measure(viscous_numbers(v), methods(m), preconditioners(p))
         end do
       end do
@@ -78,6 +82,7 @@ contains
     coefficient = viscous_number * grid%dx**2 / 2
     config%method = method
     config%preconditioner = preconditioner
+    if (preconditioner == 'user+jac') config%preconditioner = 'user'
     config%tolerance = 1.0e-10_wp
     config%max_iterations = 1000
     call helmholtz_rows_create(grid, coefficient, rows)
@@ -85,8 +90,9 @@ contains
     allocate(rhs(rows_local_count(rows)), solution(rows_local_count(rows)))
 
     call start_clock(t_assemble)
-    if (preconditioner == 'user') then
+    if (config%preconditioner == 'user') then
       call fft_preconditioner_create(fft_preconditioner, grid, fft, coefficient)
+      if (preconditioner == 'user+jac') call mark_solid_rows(rows, fft_preconditioner)
       call linear_solver_create(solver, rows, config, fft_preconditioner)
     else
       call linear_solver_create(solver, rows, config)
@@ -126,11 +132,11 @@ contains
     type(sparse_rows_t), intent(inout) :: rows
     type(sparse_rows_t) :: helmholtz
     real(wp) :: node(3), mirror(3), cube(3), fraction(3), weight, distance
-    integer :: i, j, k, row, entry, source, corner, offset(3), base(3), ghosts
+    integer :: i, j, k, row, entry, source, corner, offset(3), base(3), ghosts, column
     integer, parameter :: neighbours(3, 6) = reshape([1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1], [3, 6])
     helmholtz = rows
     deallocate(rows%columns, rows%values)
-    allocate(rows%columns(8 * rows_local_count(rows)), rows%values(8 * rows_local_count(rows)))
+    allocate(rows%columns(9 * rows_local_count(rows)), rows%values(9 * rows_local_count(rows)))
     row = 0
     entry = 0
     ghosts = 0
@@ -152,21 +158,28 @@ contains
             rows%values(entry) = 1
           else
             ! Mirror point M = 2B - G of the closest surface point B; trilinear weights on the
-            ! 8 nodes around M (node (a, b, c) sits at ((a, b, c) - 1/2) dx); G's own weight
-            ! goes to the diagonal.
+            ! 8 nodes around M (node (a, b, c) sits at ((a, b, c) - 1/2) dx); the diagonal is
+            ! 1, plus G's own weight if G is one of the 8.
             ghosts = ghosts + 1
             distance = norm2(node - sphere_centre)
             mirror = sphere_centre + (2 * sphere_radius - distance) * (node - sphere_centre) / distance
             cube = mirror / grid%dx + 0.5_wp
             base = floor(cube)
             fraction = cube - base
+            entry = entry + 1
+            rows%columns(entry) = global_row(grid, i, j, k)
+            rows%values(entry) = 1
             do corner = 0, 7
               offset = [iand(corner, 1), iand(corner / 2, 1), iand(corner / 4, 1)]
               weight = product(merge(fraction, 1 - fraction, offset == 1))
-              entry = entry + 1
-              rows%columns(entry) = global_row(grid, base(1) + offset(1), base(2) + offset(2), base(3) + offset(3))
-              rows%values(entry) = weight
-              if (rows%columns(entry) == global_row(grid, i, j, k)) rows%values(entry) = 1 + weight
+              column = global_row(grid, base(1) + offset(1), base(2) + offset(2), base(3) + offset(3))
+              if (column == rows%columns(rows%row_start(row))) then
+                rows%values(rows%row_start(row)) = 1 + weight
+              else
+                entry = entry + 1
+                rows%columns(entry) = column
+                rows%values(entry) = weight
+              end if
             end do
           end if
         end do
@@ -177,6 +190,23 @@ contains
     if (is_root() .and. .not. sphere_reported) write(*, '(a,i0,a)') 'sphere: ', ghosts, ' ghost rows'
     sphere_reported = .true.
   end subroutine add_sphere_rows
+
+  !> The rows whose diagonal is not the Helmholtz one (ghost and interior rows) get Jacobi.
+  subroutine mark_solid_rows(rows, preconditioner)
+    type(sparse_rows_t), intent(in) :: rows
+    type(fft_helmholtz_preconditioner_t), intent(inout) :: preconditioner
+    integer :: row
+    logical, allocatable :: replaced(:)
+    real(wp), allocatable :: diagonal(:)
+    allocate(replaced(rows_local_count(rows)), diagonal(rows_local_count(rows)))
+    do row = 1, rows_local_count(rows)
+      diagonal(row) = sum(rows%values(rows%row_start(row):rows%row_start(row + 1) - 1), &
+          mask=rows%columns(rows%row_start(row):rows%row_start(row + 1) - 1) == rows%first_row + row - 1)
+      replaced(row) = rows%row_start(row + 1) - rows%row_start(row) /= 7
+    end do
+    preconditioner%replaced_rows = pack([(row, row = 1, size(replaced))], replaced)
+    preconditioner%replaced_diagonal = pack(diagonal, replaced)
+  end subroutine mark_solid_rows
 
   pure logical function inside(point)
     real(wp), intent(in) :: point(3)
