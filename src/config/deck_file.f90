@@ -3,7 +3,7 @@
 !> Also the shared checks that give every deck error the same form:
 !> "deck: &group variable = value is not allowed; allowed: range".
 module deck_file
-  use, intrinsic :: iso_fortran_env, only: iostat_end, iostat_eor
+  use file_system, only: read_whole_line
   use mpi_f08, only: MPI_Bcast, MPI_INTEGER, MPI_CHARACTER, MPI_COMM_WORLD, MPI_Comm_rank
   use agglo_kinds, only: wp
   use error_handling, only: fatal, input_error
@@ -64,28 +64,6 @@ contains
     call MPI_Bcast(deck%lines, len(deck%lines) * size(deck%lines), MPI_CHARACTER, 0, MPI_COMM_WORLD)
     deck%path = path
   end subroutine deck_load
-
-  !> One record of a formatted file, whatever its length (non-advancing reads in chunks).
-  subroutine read_whole_line(unit, line, ios)
-    integer, intent(in) :: unit
-    character(len=:), allocatable, intent(out) :: line
-    integer, intent(out) :: ios
-    character(len=256) :: chunk
-    integer :: got
-    line = ''
-    do
-      read(unit, '(a)', advance='no', size=got, iostat=ios) chunk
-      line = line//chunk(1:got)
-      if (ios == iostat_eor) then
-        ios = 0
-        return
-      end if
-      if (ios /= 0) then
-        if (ios == iostat_end .and. len(line) > 0) ios = 0   ! a last line without a newline
-        return
-      end if
-    end do
-  end subroutine read_whole_line
 
   !> The deck's syntax, beyond what a namelist read checks (a namelist read skips whatever it was
   !> not asked for, so each of these would otherwise drop values without a word):

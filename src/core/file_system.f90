@@ -4,9 +4,10 @@
 !> is either the old complete file or the new complete file, never a torn one.
 module file_system
   use, intrinsic :: iso_c_binding, only: c_int, c_char, c_null_char
+  use, intrinsic :: iso_fortran_env, only: iostat_end, iostat_eor
   implicit none
   private
-  public :: rename_file, file_exists, directory_exists, make_directory, delete_file, remove_path
+  public :: rename_file, file_exists, directory_exists, make_directory, delete_file, remove_path, read_whole_line
 
   interface
     function c_rename(old_path, new_path) bind(C, name='rename') result(status)
@@ -94,4 +95,26 @@ contains
       text = text//buffer(i)
     end do
   end function error_text
+
+  !> One record of a formatted file, whatever its length (non-advancing reads in chunks).
+  subroutine read_whole_line(unit, line, ios)
+    integer, intent(in) :: unit
+    character(len=:), allocatable, intent(out) :: line
+    integer, intent(out) :: ios
+    character(len=256) :: chunk
+    integer :: got
+    line = ''
+    do
+      read(unit, '(a)', advance='no', size=got, iostat=ios) chunk
+      line = line//chunk(1:got)
+      if (ios == iostat_eor) then
+        ios = 0
+        return
+      end if
+      if (ios /= 0) then
+        if (ios == iostat_end .and. len(line) > 0) ios = 0   ! a last line without a newline
+        return
+      end if
+    end do
+  end subroutine read_whole_line
 end module file_system

@@ -9,6 +9,7 @@ module run_header
   use parallel_env, only: n_ranks, is_root
   use run_directory, only: run_directory_path, run_file
   use text_format, only: int_text
+  use file_system, only: read_whole_line
   implicit none
   private
   public :: log_run_header, compact_namelist_line, compiler_options_summary, wrap_words
@@ -42,7 +43,7 @@ contains
     if (is_root()) then
       open(newunit=unit, file=run_file('run.nml'), status='old', action='read', iostat=ios)
       do while (ios == 0)
-        call read_line(unit, line, ios)
+        call read_whole_line(unit, line, ios)
         if (ios == 0) call log_line('  '//compact_namelist_line(line))
       end do
       close(unit)
@@ -236,22 +237,6 @@ contains
     starts_with = len(text) >= len(prefix)
     if (starts_with) starts_with = text(1:len(prefix)) == prefix
   end function starts_with
-
-  !> One record of any length (run.nml holds paths of any length the configuration accepts).
-  subroutine read_line(unit, line, ios)
-    integer, intent(in) :: unit
-    character(len=:), allocatable, intent(out) :: line
-    integer, intent(out) :: ios
-    character(len=256) :: chunk
-    integer :: got
-    line = ''
-    do
-      read(unit, '(a)', advance='no', size=got, iostat=ios) chunk
-      line = line//chunk(1:got)
-      if (ios /= 0) exit
-    end do
-    if (is_iostat_eor(ios)) ios = 0
-  end subroutine read_line
 
   function first_line(text) result(line)
     character(len=*), intent(in) :: text
