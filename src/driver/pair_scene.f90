@@ -7,6 +7,10 @@
 !> first-collision time (&pair mirror_first_collision, the paper's protocol), and with
 !> &pair end_rule = 'settled' not before the outcome is settled (module pair_outcome), at most at
 !> &run end_time.
+!> Checkpoints (every &output checkpoint_interval steps and at the end) hold the particle system
+!> (group particles, module particle_system_checkpoint) and the loop's own state (group pair_scene);
+!> each is written after its step's events, sample and end test, so &run restart = .true. restores
+!> both and goes on with the next particle step, bit for bit (docs/outputs.md, Checkpoints).
 module pair_scene
   use agglo_kinds, only: wp, i8
   use agglo_config, only: agglo_config_t
