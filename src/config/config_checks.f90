@@ -75,9 +75,6 @@ contains
     if (cfg%scene%fluid /= 'resolved' .and. cfg%run%dt_mode /= 'fixed') call input_error('run', 'dt_mode', &
         ''''//trim(cfg%run%dt_mode)//''' with fluid = '''//trim(cfg%scene%fluid)//'''', &
         '''fixed'' (the CFL number is a property of the resolved fluid)')
-    if (cfg%scene%fluid /= 'resolved' .and. cfg%run%restart) call input_error('run', 'restart', &
-        '.true. with fluid = '''//trim(cfg%scene%fluid)//'''', &
-        '.false. (pair scenes run in about a second and write no checkpoints: run them again)')
     if (cfg%scene%fluid /= 'resolved' .and. cfg%scene%particle_substeps /= 1) call input_error('scene', &
         'particle_substeps', int_text(cfg%scene%particle_substeps)//' with fluid = '''//trim(cfg%scene%fluid)//'''', &
         '1 (sub-steps split a fluid step; without a resolved fluid set &run dt itself)')

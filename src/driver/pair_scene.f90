@@ -7,13 +7,23 @@
 !> first-collision time (&pair mirror_first_collision, the paper's protocol), and with
 !> &pair end_rule = 'settled' not before the outcome is settled (module pair_outcome), at most at
 !> &run end_time.
+!> Checkpoints (every &output checkpoint_interval steps and at the end) hold the particle system
+!> (group particles, module particle_system_checkpoint) and the loop's own state (group pair_scene);
+!> each is written after its step's events, sample and end test, so &run restart = .true. restores
+!> both and goes on with the next particle step, bit for bit (docs/outputs.md, Checkpoints).
 module pair_scene
   use agglo_kinds, only: wp, i8
   use agglo_config, only: agglo_config_t
+  use error_handling, only: fatal
+  use timer_registry, only: timer_register, timer_tic, timer_toc
   use logger, only: log_line
   use wall_clock, only: wall_time
   use progress_meter, only: progress_meter_t, progress_report, scientific_text
   use run_directory, only: run_file
+  use hdf5_io, only: h5_exists, h5_write_array, h5_read_array
+  use checkpoint_files, only: checkpoint_t, checkpoint_begin, checkpoint_commit, checkpoint_open_newest, checkpoint_close
+  use particle_system_checkpoint, only: write_particle_system_checkpoint, read_particle_system_checkpoint
+  use fluid_monitor, only: timing_report
   use pair_setup, only: pair_t, build_pair
   use rigid_body, only: integrator_code, angular_velocity_lab
   use closest_points, only: symmetry_axis_angle
@@ -25,6 +35,7 @@ module pair_scene
   use pair_outcome, only: pair_outcome_t, pair_outcome_of, pair_outcome_rules_t, pair_outcome_rules_of
   use particle_output, only: particle_output_t, pair_run_metadata_t, particle_record_t, pair_record_t, &
                              collision_event_t, run_summary_t, particle_output_open, particle_output_close, &
+                             particle_output_continue, particle_output_flush, particle_output_rows, &
                              append_particles_sample, append_collision_event, write_summary_json
   implicit none
   private
@@ -32,6 +43,14 @@ module pair_scene
 
   !> The pair's only pair in the system's pair list.
   integer, parameter :: the_pair = 1
+
+  !> The scene's loop state besides the particle system (kept in its checkpoints).
+  type :: pair_loop_t
+    real(wp) :: time = 0.0_wp                 !< s
+    integer(i8) :: step = 0_i8
+    real(wp) :: end_time = 0.0_wp             !< s: &run end_time, or twice the first-collision time
+    real(wp) :: max_vdw_force = 0.0_wp        !< N, largest so far
+  end type pair_loop_t
 
 contains
 
@@ -44,9 +63,11 @@ contains
     type(pair_outcome_rules_t) :: rules
     type(particle_output_t) :: output
     type(run_summary_t) :: summary
-    real(wp) :: time, dt, end_time, wall_start, max_vdw_force
-    integer(i8) :: step
-    logical :: stokes, finished
+    type(pair_loop_t) :: loop
+    real(wp) :: dt, wall_start
+    integer(i8) :: first_step
+    integer :: timer_step
+    logical :: stokes, finished, resumed
 
     call build_pair(cfg%pair, cfg%run%seed, pair)
     call setup_system(cfg, pair, system)
@@ -54,41 +75,155 @@ contains
     if (stokes) resistance = stokes_resistance_of(pair%shape, cfg%fluid%density * cfg%fluid%viscosity)
     rules = pair_outcome_rules_of(system%models)
     call log_pair(cfg, pair, rules)
-    call particle_output_open(output, run_file('particles.h5'), pair_run_metadata_t(name=cfg%run%name, &
-        shape=cfg%pair%shape, aspect_ratio=pair%shape%aspect_ratio, radius=cfg%pair%radius, fluid=cfg%scene%fluid, &
-        seed=int(cfg%run%seed, i8), bodies=system%n))
+    timer_step = timer_register('particle step')
 
     dt = cfg%run%dt
-    end_time = cfg%run%end_time
-    time = 0.0_wp
-    step = 0_i8
-    max_vdw_force = 0.0_wp
+    loop%end_time = cfg%run%end_time
     summary%collisions = 0
-    wall_start = wall_time()
     hydrodynamic = particle_loads_zero(system%n)
-    ! The collision test comes first, on the current state: with a detection distance of
-    ! v_n dt the pair is caught before a step could carry it into overlap.
-    call particle_system_interact(system, dt)
+    resumed = cfg%run%restart
+    if (resumed) then
+      call restore_pair_scene(cfg, system, loop, summary, hydrodynamic, output)
+    else
+      call particle_output_open(output, run_file('particles.h5'), pair_run_metadata_t(name=cfg%run%name, &
+          shape=cfg%pair%shape, aspect_ratio=pair%shape%aspect_ratio, radius=cfg%pair%radius, fluid=cfg%scene%fluid, &
+          seed=int(cfg%run%seed, i8), bodies=system%n))
+      ! The collision test comes first, on the current state: with a detection distance of
+      ! v_n dt the pair is caught before a step could carry it into overlap.
+      call particle_system_interact(system, dt)
+    end if
+    first_step = loop%step
+    wall_start = wall_time()
     finished = .false.
     do
-      call record_interaction(cfg, system, time, output, summary, end_time, max_vdw_force)
-      if (stokes) call stokes_loads_of(resistance, system, hydrodynamic)
-      if (step > 0) finished = run_finished(cfg, rules, system, summary, time, step, end_time)
-      if (mod(step, int(cfg%output%stats_interval, i8)) == 0 .or. finished) &
-        call write_sample(output, time, system, hydrodynamic)
-      if (step > 0 .and. (mod(step, int(cfg%run%progress_interval, i8)) == 0 .or. finished)) &
-        call progress_line(step, time, dt, end_time, system, wall_time() - wall_start)
+      if (resumed) then
+        ! The checkpoint was written after this step's events, sample and end test: only the end
+        ! test is repeated (the deck of the continued run may set a later end).
+        resumed = .false.
+        finished = loop%step > 0 .and. run_finished(cfg, rules, system, summary, loop%time, loop%step, loop%end_time)
+        if (finished .and. .not. sampled(cfg, loop%step)) call write_sample(output, loop%time, system, hydrodynamic)
+      else
+        call record_interaction(cfg, system, loop, output, summary)
+        if (stokes) call stokes_loads_of(resistance, system, hydrodynamic)
+        if (loop%step > 0) finished = run_finished(cfg, rules, system, summary, loop%time, loop%step, loop%end_time)
+        if (sampled(cfg, loop%step) .or. finished) &
+          call write_sample(output, loop%time, system, hydrodynamic)
+        if (loop%step > first_step .and. (mod(loop%step, int(cfg%run%progress_interval, i8)) == 0 .or. finished)) &
+          call progress_line(loop%step - first_step, loop, dt, system, wall_time() - wall_start)
+        if (.not. finished .and. loop%step > first_step .and. cfg%output%checkpoint_interval > 0) then
+          if (mod(loop%step, int(cfg%output%checkpoint_interval, i8)) == 0) &
+            call checkpoint_pair_scene(cfg, system, loop, summary, hydrodynamic, output, last=.false.)
+        end if
+      end if
       if (finished) exit
+      call timer_tic(timer_step)
       call particle_system_step(system, dt, hydrodynamic)   ! zero at fluid = 'none'
-      time = time + dt
-      step = step + 1
+      call timer_toc(timer_step)
+      loop%time = loop%time + dt
+      loop%step = loop%step + 1
     end do
+    ! The last state is always kept (checkpoint_interval = 0: only there; the loop writes none at the
+    ! end), so a finished run can be continued with a later &run end_time.
+    if (loop%step > first_step) call checkpoint_pair_scene(cfg, system, loop, summary, hydrodynamic, output, last=.true.)
     call particle_output_close(output)
 
-    call finish_summary(cfg, rules, system, time, step, max_vdw_force, wall_time() - wall_start, summary)
+    call finish_summary(cfg, rules, system, loop, summary)
+    summary%wall_time = wall_time() - wall_start
     call write_summary_json(run_file('summary.json'), summary)
+    call timing_report(loop%step - first_step, wall_time() - wall_start)
     call log_line('pair scene: outcome '//trim(summary%outcome)//'; particles.h5 and summary.json written')
   end subroutine run_pair_scene
+
+  !> One checkpoint transaction: the particle system's group and the scene's own (group pair_scene:
+  !> time, step, the largest vdW force, the collision count and first collision, the Stokes loads the
+  !> next step is taken under, and the rows of particles.h5, flushed to disk first).
+  subroutine checkpoint_pair_scene(cfg, system, loop, summary, hydrodynamic, output, last)
+    type(agglo_config_t), intent(in) :: cfg
+    type(particle_system_t), intent(in) :: system
+    type(pair_loop_t), intent(in) :: loop
+    type(run_summary_t), intent(in) :: summary
+    type(particle_loads_t), intent(in) :: hydrodynamic
+    type(particle_output_t), intent(inout) :: output
+    logical, intent(in) :: last          !< the finished run's last state
+    type(checkpoint_t) :: transaction
+    integer(i8) :: rows(2)
+    call particle_output_flush(output)
+    call particle_output_rows(output, rows(1), rows(2))
+    ! The sample a finished run adds at its last step is not kept: a continued run that goes on does
+    ! not have it, one that ends there writes it again.
+    if (last .and. .not. sampled(cfg, loop%step)) rows(1) = rows(1) - 1_i8
+    call checkpoint_begin(transaction, loop%step)
+    call write_particle_system_checkpoint(transaction, system)
+    associate (file => transaction%file, first => summary%first_collision)
+      call h5_write_array(file, 'pair_scene/time', loop%time)
+      call h5_write_array(file, 'pair_scene/step', loop%step)
+      call h5_write_array(file, 'pair_scene/max_vdw_force', loop%max_vdw_force)
+      call h5_write_array(file, 'pair_scene/collisions', summary%collisions)
+      call h5_write_array(file, 'pair_scene/has_first_collision', merge(1, 0, summary%has_first_collision))
+      call h5_write_array(file, 'pair_scene/first_collision', [first%time, first%theta1, first%phi1, first%theta2, &
+          first%phi2, first%normal_velocity_before, first%normal_velocity_after, first%psi])
+      call h5_write_array(file, 'pair_scene/first_collision_bodies', [first%first, first%second])
+      call h5_write_array(file, 'pair_scene/hydrodynamic_force', hydrodynamic%force)
+      call h5_write_array(file, 'pair_scene/hydrodynamic_torque', hydrodynamic%torque)
+      call h5_write_array(file, 'pair_scene/output_rows', rows)
+    end associate
+    call checkpoint_commit(transaction, cfg%output%checkpoints_kept)
+  end subroutine checkpoint_pair_scene
+
+  !> &run restart: the newest valid checkpoint restores the particle system and the scene's loop
+  !> (the system is current: no new interaction), and particles.h5 continues from its rows.
+  subroutine restore_pair_scene(cfg, system, loop, summary, hydrodynamic, output)
+    type(agglo_config_t), intent(in) :: cfg
+    type(particle_system_t), intent(inout) :: system
+    type(pair_loop_t), intent(inout) :: loop
+    type(run_summary_t), intent(inout) :: summary
+    type(particle_loads_t), intent(inout) :: hydrodynamic
+    type(particle_output_t), intent(out) :: output
+    type(checkpoint_t) :: restart
+    real(wp), allocatable :: first(:), force(:,:), torque(:,:)
+    integer(i8), allocatable :: rows(:)
+    integer, allocatable :: bodies(:)
+    integer :: flag
+    call checkpoint_open_newest(restart)
+    if (.not. h5_exists(restart%file, 'pair_scene/step')) call fatal('checkpoint '//restart%path// &
+        ' holds no pair scene (group pair_scene): &run restart must continue a run of the same scene')
+    call read_particle_system_checkpoint(restart, system)
+    associate (file => restart%file)
+      call h5_read_array(file, 'pair_scene/time', loop%time)
+      call h5_read_array(file, 'pair_scene/step', loop%step)
+      call h5_read_array(file, 'pair_scene/max_vdw_force', loop%max_vdw_force)
+      call h5_read_array(file, 'pair_scene/collisions', summary%collisions)
+      call h5_read_array(file, 'pair_scene/has_first_collision', flag)
+      call h5_read_array(file, 'pair_scene/first_collision', first)
+      call h5_read_array(file, 'pair_scene/first_collision_bodies', bodies)
+      call h5_read_array(file, 'pair_scene/hydrodynamic_force', force)
+      call h5_read_array(file, 'pair_scene/hydrodynamic_torque', torque)
+      call h5_read_array(file, 'pair_scene/output_rows', rows)
+    end associate
+    if (size(first) /= 8 .or. size(bodies) /= 2 .or. size(rows) /= 2 .or. any(shape(force) /= [3, system%n]) .or. &
+        any(shape(torque) /= [3, system%n])) call fatal('checkpoint '//restart%path// &
+        ': its pair_scene group does not fit this scene (written by another version or deck?)')
+    summary%has_first_collision = (flag == 1)
+    summary%first_collision = collision_event_t(time=first(1), theta1=first(2), phi1=first(3), theta2=first(4), &
+        phi2=first(5), normal_velocity_before=first(6), normal_velocity_after=first(7), psi=first(8), &
+        first=bodies(1), second=bodies(2))
+    hydrodynamic%force = force
+    hydrodynamic%torque = torque
+    ! The paper's end (twice the first-collision time) as record_interaction set it, under this deck.
+    loop%end_time = cfg%run%end_time
+    if (summary%has_first_collision .and. cfg%pair%mirror_first_collision) &
+      loop%end_time = min(loop%end_time, 2.0_wp * summary%first_collision%time)
+    call log_line('pair scene: continuing from '//restart%path)
+    call checkpoint_close(restart)
+    call particle_output_continue(output, run_file('particles.h5'), system%n, rows(1), rows(2))
+  end subroutine restore_pair_scene
+
+  !> Is step one of the &output stats_interval samples?
+  logical function sampled(cfg, step)
+    type(agglo_config_t), intent(in) :: cfg
+    integer(i8), intent(in) :: step
+    sampled = mod(step, int(cfg%output%stats_interval, i8)) == 0
+  end function sampled
 
   !> The two bodies of the placed pair, their models, no box (the pair scenes are unbounded), and
   !> the placement's closest points as the current contact.
@@ -124,15 +259,15 @@ contains
 
   !> After an interaction: the collision events (the first one may set the paper's end time) and the
   !> largest vdW force so far.
-  subroutine record_interaction(cfg, system, time, output, summary, end_time, max_vdw_force)
+  subroutine record_interaction(cfg, system, loop, output, summary)
     type(agglo_config_t), intent(in) :: cfg
     type(particle_system_t), intent(in) :: system
-    real(wp), intent(in) :: time
+    type(pair_loop_t), intent(inout) :: loop
     type(particle_output_t), intent(inout) :: output
     type(run_summary_t), intent(inout) :: summary
-    real(wp), intent(inout) :: end_time, max_vdw_force
     type(collision_event_t) :: event
-    associate (pair => system%pairs(the_pair))
+    associate (pair => system%pairs(the_pair), time => loop%time, end_time => loop%end_time, &
+               max_vdw_force => loop%max_vdw_force)
       if (pair%collided) then
         event = collision_event_t(time=time, theta1=pair%contact%theta1, phi1=pair%contact%phi1, &
             theta2=pair%contact%theta2, phi2=pair%contact%phi2, &
@@ -217,25 +352,27 @@ contains
     end associate
   end function normal_approach_speed
 
-  !> The progress line (core progress_meter) with the pair's gap and normal approach speed.
-  subroutine progress_line(step, time, dt, end_time, system, elapsed)
-    integer(i8), intent(in) :: step
-    real(wp), intent(in) :: time, dt, end_time, elapsed
+  !> The progress line (core progress_meter) with the pair's gap and normal approach speed;
+  !> steps_taken: steps of this run segment (since the start or the restart), for the speed.
+  subroutine progress_line(steps_taken, loop, dt, system, elapsed)
+    integer(i8), intent(in) :: steps_taken
+    type(pair_loop_t), intent(in) :: loop
+    real(wp), intent(in) :: dt, elapsed
     type(particle_system_t), intent(in) :: system
     type(progress_meter_t), save :: meter
-    call log_line(progress_report(meter, wall_time(), step, time, dt, elapsed / real(step, wp), end_time - time, &
+    call log_line(progress_report(meter, wall_time(), loop%step, loop%time, dt, elapsed / real(steps_taken, wp), &
+                                  loop%end_time - loop%time, &
                                   detail='  gap = '//scientific_text(system%pairs(the_pair)%contact%gap)//' m  v_n = '// &
                                   scientific_text(normal_approach_speed(system, the_pair))//' m/s'))
   end subroutine progress_line
 
   !> The summary of the finished run; the outcome and whether it was settled (module pair_outcome,
   !> docs/theory.md "Run outcome").
-  subroutine finish_summary(cfg, rules, system, time, step, max_vdw_force, wall, summary)
+  subroutine finish_summary(cfg, rules, system, loop, summary)
     type(agglo_config_t), intent(in) :: cfg
     type(pair_outcome_rules_t), intent(in) :: rules
     type(particle_system_t), intent(in) :: system
-    real(wp), intent(in) :: time, max_vdw_force, wall
-    integer(i8), intent(in) :: step
+    type(pair_loop_t), intent(in) :: loop
     type(run_summary_t), intent(inout) :: summary
     type(pair_outcome_t) :: outcome
     outcome = current_outcome(rules, system, summary)
@@ -247,13 +384,12 @@ contains
     summary%shape = cfg%pair%shape
     summary%aspect_ratio = system%shapes(1)%aspect_ratio
     summary%fluid = cfg%scene%fluid
-    summary%max_vdw_force = max_vdw_force
+    summary%max_vdw_force = loop%max_vdw_force
     summary%final_gap = system%pairs(the_pair)%contact%gap
     summary%final_relative_velocity = normal_approach_speed(system, the_pair)
     summary%psi_final = symmetry_axis_angle(system%bodies(1)%quaternion, system%bodies(2)%quaternion)
-    summary%end_time = time
-    summary%steps = step
-    summary%wall_time = wall
+    summary%end_time = loop%time
+    summary%steps = loop%step
   end subroutine finish_summary
 
   subroutine log_pair(cfg, pair, rules)

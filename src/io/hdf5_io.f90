@@ -48,13 +48,17 @@ module hdf5_io
   private
   public :: h5_file_t, h5_create, h5_open, h5_close, h5_flush, h5_exists, &
             h5_write_slab, h5_read_slab, h5_write_array, h5_read_array, h5_write_string, h5_read_string, &
-            h5_append, h5_truncate, h5_delete, h5_dataset_shape, hdf5_io_finalize, h5_verify, longest_parallel_path
+            h5_append, h5_truncate, h5_delete, h5_dataset_shape, h5_dataset_names, hdf5_io_finalize, h5_verify, &
+            longest_parallel_path
 
   !> Longest path of a file opened through MPI-IO. Open MPI 4.1.4's shared-file-pointer component
   !> 'lockedfile' probes every file it opens with a lock file named <path>.locktest.<rank>, built with
   !> sprintf into a fixed buffer: with this Open MPI a 228-character path worked and 229 aborted
   !> (buffer overflow, SIGABRT) on 1 and 2 ranks. 220 leaves room for rank numbers up to 9 digits.
   integer, parameter :: longest_parallel_path = 220
+
+  !> Longest dataset name h5_dataset_names returns (with its groups).
+  integer, parameter, public :: dataset_name_length = 256
 
   !> An open HDF5 file (parallel over MPI_COMM_WORLD, or serial on the calling rank).
   type :: h5_file_t
@@ -1013,6 +1017,37 @@ contains
     call h5ldelete_f(file%id, name, status)
     call require_ok(status, 'deleting a link', file, name)
   end subroutine h5_delete
+
+  !> Names of every dataset in the file, below every group (as 'group/dataset', no leading slash), in
+  !> HDF5's index order. A restarted run uses it to shrink the time series of a file it continues.
+  subroutine h5_dataset_names(file, names)
+    type(h5_file_t), intent(in) :: file
+    character(len=dataset_name_length), allocatable, intent(out) :: names(:)
+    call require_open(file, '/', .false.)
+    allocate(names(0))
+    call collect_datasets(file, '', names)
+  end subroutine h5_dataset_names
+
+  recursive subroutine collect_datasets(file, group, names)
+    type(h5_file_t), intent(in) :: file
+    character(len=*), intent(in) :: group            !< '' (the root) or 'a/b/'
+    character(len=dataset_name_length), allocatable, intent(inout) :: names(:)
+    character(len=dataset_name_length) :: member
+    integer :: members, i, kind, status
+    call h5gn_members_f(file%id, '/'//group, members, status)
+    call require_ok(status, 'listing a group', file, '/'//group)
+    do i = 0, members - 1
+      call h5gget_obj_info_idx_f(file%id, '/'//group, i, member, kind, status)
+      call require_ok(status, 'reading the entries of a group', file, '/'//group)
+      if (len(group) + len_trim(member) > dataset_name_length) call fatal('hdf5_io: a name in '//file%path// &
+          ' is longer than the listing allows: '//group//trim(member), collective=.false.)
+      if (kind == H5G_GROUP_F) then
+        call collect_datasets(file, group//trim(member)//'/', names)
+      else if (kind == H5G_DATASET_F) then
+        names = [character(len=dataset_name_length) :: names, group//trim(member)]
+      end if
+    end do
+  end subroutine collect_datasets
 
   ! ---------------------------------------------------------------------------------------------
   ! Verification

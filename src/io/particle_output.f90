@@ -14,18 +14,21 @@
 !> Rows are buffered in memory (buffer_rows of them) and appended to extendible, chunked datasets
 !> when the buffer is full, on particle_output_flush and on particle_output_close.
 !> particles.h5 is complete once closed; summary.json, written last via a temporary name, marks a
-!> completed run.
+!> completed run. A restarted run continues the file of the run it continues (particle_output_continue)
+!> from the row counts its checkpoint recorded (particle_output_rows, after particle_output_flush).
 module particle_output
   use agglo_kinds, only: wp, i8
   use error_handling, only: fatal
   use file_system, only: rename_file
   use parallel_env, only: is_root
-  use hdf5_io, only: h5_file_t, h5_create, h5_close, h5_flush, h5_append, h5_write_array, h5_write_string
+  use hdf5_io, only: h5_file_t, h5_create, h5_open, h5_close, h5_flush, h5_append, h5_write_array, h5_write_string, &
+                     h5_dataset_names, h5_dataset_shape, h5_truncate, dataset_name_length
   use json_writer, only: json_object_t, json_add, json_add_null, json_text
   implicit none
   private
   public :: particle_output_t, pair_run_metadata_t, particle_record_t, pair_record_t, collision_event_t, &
-            run_summary_t, particle_output_open, particle_output_close, particle_output_flush, &
+            run_summary_t, particle_output_open, particle_output_continue, particle_output_close, &
+            particle_output_flush, particle_output_rows, &
             sample_value, sample_end, event_value, event_end, append_pair_sample, append_particles_sample, &
             append_collision_event, &
             write_summary_json, collision_event_columns
@@ -164,6 +167,46 @@ contains
     call h5_write_array(out%file, 'seed', metadata%seed)
     if (metadata%bodies > 2) call h5_write_array(out%file, 'bodies', int(metadata%bodies, i8))
   end subroutine particle_output_open
+
+  !> Continue the particles.h5 at path of an interrupted or finished run (rank 0): the rows written
+  !> after its checkpoint are dropped, so the file holds sample_rows samples and event_rows events
+  !> (particle_output_rows when the checkpoint was written) and later rows append to them; the run
+  !> identity at the root is kept. Stops with a message if the file has fewer rows.
+  subroutine particle_output_continue(out, path, bodies, sample_rows, event_rows)
+    type(particle_output_t), intent(out) :: out
+    character(len=*), intent(in) :: path
+    integer, intent(in) :: bodies                  !< as in the metadata the file was opened with
+    integer(i8), intent(in) :: sample_rows, event_rows
+    character(len=dataset_name_length), allocatable :: names(:)
+    integer :: i
+    out%active = is_root()
+    out%samples%group = ''
+    out%events%group = 'events/'
+    allocate(out%samples%columns(0), out%events%columns(0))
+    out%bodies = bodies
+    out%samples%rows = sample_rows
+    out%events%rows = event_rows
+    if (.not. out%active) return
+    call h5_open(out%file, path, writable=.true., serial=.true.)
+    call h5_dataset_names(out%file, names)
+    do i = 1, size(names)
+      if (size(h5_dataset_shape(out%file, trim(names(i)))) == 0) cycle   ! the run identity (scalars)
+      if (names(i)(1:len(out%events%group)) == out%events%group) then
+        call h5_truncate(out%file, trim(names(i)), int(event_rows))
+      else
+        call h5_truncate(out%file, trim(names(i)), int(sample_rows))
+      end if
+    end do
+  end subroutine particle_output_continue
+
+  !> Rows committed so far (written or buffered; rank 0's count, 0 on the other ranks): the time
+  !> series and the events table.
+  subroutine particle_output_rows(out, sample_rows, event_rows)
+    type(particle_output_t), intent(in) :: out
+    integer(i8), intent(out) :: sample_rows, event_rows
+    sample_rows = out%samples%rows
+    event_rows = out%events%rows
+  end subroutine particle_output_rows
 
   !> Write the buffered rows and push them to disk (a crash loses nothing written before).
   subroutine particle_output_flush(out)

@@ -73,7 +73,7 @@ expect_error pair_without_particles 1 "&run name = 'p' /
 &scene fluid = 'stokes' /" '&scene particles' "'pair'"
 expect_error resolved_with_pair 1 "&run name = 'p' /
 &scene fluid = 'resolved', particles = 'pair' /" 'immersed-boundary coupling'
-expect_error pair_scene_restart 1 "&run name = 'p', restart = .true. /
-&scene fluid = 'none', particles = 'pair' /" '&run restart' 'no checkpoints'
+expect_error pair_scene_restart_without_run 1 "&run name = 'p', restart = .true. /
+&scene fluid = 'none', particles = 'pair' /" '&run restart' 'no earlier run'
 expect_error pair_scene_substeps 1 "&run name = 'p' /
 &scene fluid = 'stokes', particles = 'pair', particle_substeps = 4 /" '&scene particle_substeps' '1 (sub-steps'
