@@ -154,7 +154,8 @@ contains
   end subroutine write_checkpoint
 
   !> 'flip': change one byte of the first stored value of rank 0's field (1/7: a finite, wrong value
-  !> without a checksum); 'header': change a letter of the group name component_b; 'truncate': keep the first half; 'zero': the same size in zero bytes.
+  !> without a checksum); 'header': change a letter of the group name component_b; 'truncate': keep
+  !> the first half; 'zero': the same size in zero bytes.
   subroutine damage(path, how)
     character(len=*), intent(in) :: path, how
     integer(int8), allocatable :: bytes(:), pattern(:)
