@@ -9,6 +9,7 @@ module agglo_config
   use config_pair, only: pair_config_t, write_pair_group
   use config_dlvo, only: dlvo_config_t, write_dlvo_group
   use config_collision, only: collision_config_t, write_collision_group
+  use config_bodies, only: bodies_config_t, write_bodies_group
   implicit none
   private
   public :: agglo_config_t, deck_group_names, write_config
@@ -23,12 +24,13 @@ module agglo_config
     type(pair_config_t) :: pair
     type(dlvo_config_t) :: dlvo
     type(collision_config_t) :: collision
+    type(bodies_config_t) :: bodies
     character(len=256) :: deck_path = ''     !< the deck file this configuration came from
   end type agglo_config_t
 
   !> Every namelist group a deck may contain.
-  character(len=16), parameter :: deck_group_names(9) = [character(len=16) :: &
-      'run', 'scene', 'grid', 'fluid', 'forcing', 'pair', 'dlvo', 'collision', 'output']
+  character(len=16), parameter :: deck_group_names(10) = [character(len=16) :: &
+      'run', 'scene', 'grid', 'fluid', 'forcing', 'pair', 'dlvo', 'collision', 'output', 'bodies']
 
 contains
 
@@ -45,5 +47,6 @@ contains
     call write_dlvo_group(unit, cfg%dlvo)
     call write_collision_group(unit, cfg%collision)
     call write_output_group(unit, cfg%output)
+    call write_bodies_group(unit, cfg%bodies)
   end subroutine write_config
 end module agglo_config

@@ -12,19 +12,20 @@ module immersed_scene
   use error_handling, only: fatal
   use parallel_env, only: is_root
   use logger, only: log_line
-  use text_format, only: real_text
+  use text_format, only: real_text, int_text
   use timer_registry, only: timer_register, timer_tic, timer_toc
-  use fluid_grid, only: allocate_field
+  use fluid_grid, only: fluid_grid_t, allocate_field
   use fluid_solver, only: fluid_solver_t, fluid_predict, fluid_project, fluid_finish_step
   use quaternion, only: quaternion_from_axis_angle, quaternion_product, quaternion_normalise
-  use spheroid, only: spheroid_t
-  use immersed_geometry, only: immersed_body_t
+  use spheroid, only: spheroid_t, make_spheroid
+  use config_bodies, only: bodies_config_t
+  use immersed_geometry, only: immersed_body_t, thin_dimension_cells
   use immersed_boundary, only: immersed_boundary_t, ibm_settings_t, imposition_report_t, ibm_set_bodies, &
                                ibm_impose, ibm_begin_step, ibm_step_loads, cell_divergence_max
   implicit none
   private
   public :: prescribed_motion_t, immersed_scene_t, immersed_scene_create, immersed_step, motion_body, &
-            motion_velocity, loads_open, loads_write, loads_close
+            motion_velocity, loads_open, loads_write, loads_close, motions_from_config
 
   !> One body's shape and prescribed rigid motion.
   type :: prescribed_motion_t
@@ -47,7 +48,8 @@ module immersed_scene
     type(imposition_report_t) :: predicted, projected    !< the two impositions of the last step
     real(wp) :: divergence = 0                 !< 1/s, largest |div u| after the re-imposition (cut cells)
     integer :: timer = 0
-    integer :: loads_unit = -1
+    integer :: loads_unit = 0
+    logical :: loads_opened = .false.              !< this rank writes bodies_loads.dat
   end type immersed_scene_t
 
 contains
@@ -122,6 +124,57 @@ contains
     call ibm_set_bodies(scene%ibm, solver%grid, bodies, velocity, angular_velocity, classify)
   end subroutine place_bodies
 
+  !> The bodies of the deck's &bodies group (the density is the fluid's: prescribed motion needs
+  !> none). A body thinner than 4 cells of the grid is refused with the grid it needs: the ghost
+  !> layers of its opposite faces would overlap (ibm-notes section 0).
+  function motions_from_config(cfg, grid) result(motion)
+    type(bodies_config_t), intent(in) :: cfg
+    type(fluid_grid_t), intent(in) :: grid
+    type(prescribed_motion_t), allocatable :: motion(:)
+    real(wp), parameter :: thinnest_cells = 4.0_wp
+    real(wp) :: cells, axis(3), ex(3), thin
+    integer :: n, needed
+    character(len=320) :: text
+    allocate(motion(cfg%count))
+    ex = [1.0_wp, 0.0_wp, 0.0_wp]
+    do n = 1, cfg%count
+      if (trim(cfg%shape(n)) == 'sphere') then
+        motion(n)%shape = make_spheroid('sphere', cfg%radius(n), 1.0_wp)
+      else
+        motion(n)%shape = make_spheroid(trim(cfg%shape(n)), cfg%radius(n), 1.0_wp, cfg%aspect_ratio(n))
+      end if
+      cells = thin_dimension_cells(motion(n)%shape, grid)
+      if (cells < thinnest_cells) then
+        thin = 2.0_wp * min(motion(n)%shape%a, motion(n)%shape%b)
+        needed = ceiling(thinnest_cells * max(grid%lx, grid%ly, grid%lz) / thin)
+        write(text, '(a,i0,a,a,a,f5.2,a,i0,a,i0,a)') 'deck: &bodies body ', n, ' (', trim(cfg%shape(n)), &
+            ') is ', cells, ' cells thin on this grid; the immersed boundary needs at least 4: use &grid nx = ny = nz >= ', &
+            needed, ' (', needed, '^3 for this box) or a larger radius'
+        call fatal(trim(text))
+      end if
+      motion(n)%centre = cfg%centre(:, n)
+      axis = cfg%axis(:, n)
+      if (norm2(axis) > 0.0_wp) then
+        axis = axis / norm2(axis)
+        if (norm2(cross3(ex, axis)) > 1.0e-12_wp) then
+          motion(n)%orientation = quaternion_from_axis_angle(cross3(ex, axis), acos(max(-1.0_wp, min(1.0_wp, axis(1)))))
+        else if (axis(1) < 0.0_wp) then
+          motion(n)%orientation = quaternion_from_axis_angle([0.0_wp, 0.0_wp, 1.0_wp], acos(-1.0_wp))
+        end if
+      end if
+      motion(n)%velocity = cfg%velocity(:, n)
+      motion(n)%angular_velocity = cfg%angular_velocity(:, n)
+      motion(n)%amplitude = cfg%oscillation_amplitude(:, n)
+      motion(n)%frequency = cfg%oscillation_frequency(n)
+    end do
+  contains
+    pure function cross3(a, b) result(c)
+      real(wp), intent(in) :: a(3), b(3)
+      real(wp) :: c(3)
+      c = [a(2) * b(3) - a(3) * b(2), a(3) * b(1) - a(1) * b(3), a(1) * b(2) - a(2) * b(1)]
+    end function cross3
+  end function motions_from_config
+
   !> The body at time t, its centre wrapped into the box.
   pure function motion_body(motion, time, box) result(body)
     type(prescribed_motion_t), intent(in) :: motion
@@ -156,6 +209,7 @@ contains
       open(newunit=scene%loads_unit, file=path, status='replace', action='write', iostat=ios, iomsg=message)
     end if
     if (ios /= 0) call fatal('immersed scene: cannot open '//path//': '//trim(message))
+    scene%loads_opened = .true.
     if (.not. append) write(scene%loads_unit, '(a)') '# step time_s body force_x_N force_y_N force_z_N ' // &
         'torque_x_Nm torque_y_Nm torque_z_Nm sweeps residual slip divergence_per_s'
   end subroutine loads_open
@@ -166,7 +220,7 @@ contains
     integer(i8), intent(in) :: step
     real(wp), intent(in) :: time
     integer :: n
-    if (.not. is_root() .or. scene%loads_unit < 0) return
+    if (.not. scene%loads_opened) return
     do n = 1, size(scene%motion)
       write(scene%loads_unit, '(i0,1x,es23.16,1x,i0,6(1x,es23.16),1x,i0,3(1x,es10.3))') step, time, n, &
           scene%force(:, n), scene%torque(:, n), scene%predicted%sweeps, scene%predicted%residual, &
@@ -177,9 +231,9 @@ contains
 
   subroutine loads_close(scene)
     type(immersed_scene_t), intent(inout) :: scene
-    if (scene%loads_unit >= 0) close(scene%loads_unit)
-    scene%loads_unit = -1
-    call log_line('immersed scene: last step sweeps '//real_text(real(scene%predicted%sweeps, wp))// &
+    if (scene%loads_opened) close(scene%loads_unit)
+    scene%loads_opened = .false.
+    call log_line('immersed scene: last step sweeps '//int_text(scene%predicted%sweeps)// &
                   ', residual '//real_text(scene%predicted%residual)//', slip '// &
                   real_text(scene%projected%largest_change)//', cut-cell divergence '//real_text(scene%divergence)//' 1/s')
   end subroutine loads_close
