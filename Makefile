@@ -67,7 +67,7 @@ else
   Q = @echo "  $(notdir $@)";
 endif
 
-.PHONY: help deps build run test bench clean tools-deps
+.PHONY: help deps build run test bench validate clean tools-deps
 .SECONDARY:
 help: ## list the targets
 	@echo "Agglo - make targets (MODE=release|debug, NP=ranks, DECK=deck for run):"
@@ -143,6 +143,10 @@ $(VENV)/.requirements-installed: tools/requirements.txt
 bench: deps ## run the benchmarks (results for docs/performance.md)
 	@$(MAKE) --no-print-directory build $(BENCH_PROGRAMS)
 	@BUILD=$(BUILD) tools/bench.sh
+
+validate: deps ## run the immersed-boundary validation ladder (the table in docs/validation.md)
+	@$(MAKE) --no-print-directory build $(BUILD)/bench/bench_immersed_ladder
+	$(MPIRUN) -np 1 $(BUILD)/bench/bench_immersed_ladder
 
 clean: ## remove the build directory
 	rm -rf $(BUILD)
