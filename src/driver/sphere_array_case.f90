@@ -8,6 +8,10 @@
 !> phi = 0.125; ibm-notes section 5.1). U is measured on the x-face plane at the box edge, which the
 !> sphere (diameter below the box) never cuts.
 !> Steady state: the relative change of U per step below steady_tolerance.
+!>
+!> With rotating = .true. the sphere instead turns at Omega about z in fluid without drive, and the
+!> result is the steady torque, to compare with 8 pi mu a^3 Omega (Stokes, unbounded) after the
+!> box-size extrapolation (the periodic images' correction falls as (a/L)^3).
 module sphere_array_case
   use agglo_kinds, only: wp
   use physical_constants, only: pi
@@ -32,6 +36,7 @@ module sphere_array_case
     integer :: max_steps = 20000
     real(wp) :: offset_cells(3) = [0.13_wp, 0.27_wp, 0.41_wp]   !< sphere centre - box centre, cells
     real(wp) :: ghost_tolerance = 1.0e-12_wp
+    logical :: rotating = .false.                !< rotating sphere, no drive, steady torque
   end type sphere_array_case_t
 
   type :: sphere_array_result_t
@@ -40,6 +45,9 @@ module sphere_array_case
     real(wp) :: superficial_velocity = 0   !< m/s
     real(wp) :: force(3) = 0               !< N, momentum-balance load of the last step
     real(wp) :: drive(3) = 0               !< N, f L^3
+    real(wp) :: torque(3) = 0              !< N m, momentum-balance torque of the last step
+    real(wp) :: stokes_torque = 0          !< N m, 8 pi mu a^3 Omega (rotating case)
+    real(wp) :: radius_over_box = 0        !< a / L
     integer :: steps = 0
     logical :: steady = .false.
     integer :: max_sweeps = 0              !< most sweeps of an imposition on u*
@@ -64,7 +72,7 @@ contains
     type(immersed_scene_t) :: scene
     type(prescribed_motion_t) :: motion(1)
     type(ibm_settings_t) :: settings
-    real(wp) :: radius, dt, u_old, u_new, t0, sweeps_total
+    real(wp) :: radius, dt, u_old, u_new, t0, sweeps_total, drive_x
     integer :: step
 
     t0 = wall_time()
@@ -83,7 +91,13 @@ contains
     settings%tolerance = case%ghost_tolerance
     settings%max_sweeps = 100
     settings%fluid_density = density
-    call immersed_scene_create(scene, solver, motion, settings, [drive, 0.0_wp, 0.0_wp])
+    drive_x = drive
+    if (case%rotating) then
+      drive_x = 0
+      ! Omega a = 1e-7 m/s: Re = Omega a^2 / nu below 1e-4.
+      motion(1)%angular_velocity = [0.0_wp, 0.0_wp, 1.0e-7_wp / radius]
+    end if
+    call immersed_scene_create(scene, solver, motion, settings, [drive_x, 0.0_wp, 0.0_wp])
 
     dt = case%viscous_number * solver%grid%dx**2 / viscosity
     u_old = 0
@@ -92,8 +106,12 @@ contains
       call immersed_step(scene, solver, dt)
       result%max_sweeps = max(result%max_sweeps, scene%predicted%sweeps)
       sweeps_total = sweeps_total + scene%predicted%sweeps
-      u_new = global_sum(sum(solver%u(solver%grid%nx, 1:solver%grid%ny, 1:solver%grid%nz_local))) / &
-              real(solver%grid%ny * solver%grid%nz, wp)
+      if (case%rotating) then
+        u_new = scene%torque(3, 1)
+      else
+        u_new = global_sum(sum(solver%u(solver%grid%nx, 1:solver%grid%ny, 1:solver%grid%nz_local))) / &
+                real(solver%grid%ny * solver%grid%nz, wp)
+      end if
       result%steps = step
       if (step > 10 .and. abs(u_new - u_old) <= case%steady_tolerance * abs(u_new)) then
         result%steady = .true.
@@ -101,6 +119,9 @@ contains
       end if
       u_old = u_new
     end do
+    result%torque = scene%torque(:, 1)
+    result%stokes_torque = 8.0_wp * pi * density * viscosity * radius**3 * motion(1)%angular_velocity(3)
+    result%radius_over_box = radius / box
     result%superficial_velocity = u_new
     result%diameter_cells = 2.0_wp * radius / solver%grid%dx
     result%drive = [drive * box**3, 0.0_wp, 0.0_wp]
