@@ -24,8 +24,9 @@ contains
   subroutine check_scene_combinations(cfg)
     type(agglo_config_t), intent(in) :: cfg
     if (cfg%scene%fluid == 'resolved' .and. cfg%scene%particles == 'pair') call fatal( &
-        'deck: &scene fluid = ''resolved'' with particles = ''pair'' needs freely moving resolved particles, '// &
-        'which this version does not have yet; use fluid = ''none'' or ''stokes'' for pair runs, or '// &
+        'deck: &scene fluid = ''resolved'' with particles = ''pair'' needs the immersed-boundary coupling '// &
+        'of freely moving particles, which this version does not have yet; use fluid = ''none'' or '// &
+        '''stokes'' for pair runs, or '// &
         'particles = ''prescribed'' with &bodies for bodies in prescribed motion')
     if (cfg%scene%particles == 'prescribed') call check_prescribed_cross(cfg)
     if (cfg%scene%fluid /= 'resolved' .and. cfg%scene%particles == 'none') call input_error('scene', &
