@@ -3,8 +3,9 @@
 !> implicit and explicit coupling, against Zick & Homsy (1982, J. Fluid Mech. 115, 13, Table 2:
 !> K = 4.292 at phi = 0.125, 2.810 at phi = 0.064), with the observed order of convergence between
 !> the coarsest and the finest grid, p = ln(e_8 / e_16) / ln(D_16 / D_8). Then a rotating sphere at
-!> D/dx = 8 in boxes L/D = 2, 3, 4: the torque extrapolated to the unbounded box by a least-squares
-!> line in (a/L)^3 against 8 pi mu a^3 Omega (Stokes). Prints Markdown tables.
+!> D/dx = 8 and 12 in boxes L/D = 2, 3, 4: the torque -T (it opposes the rotation) extrapolated to
+!> the unbounded box by a least-squares line in (a/L)^3 against 8 pi mu a^3 Omega (Stokes).
+!> Prints Markdown tables.
 program bench_immersed_ladder
   use agglo_kinds, only: wp
   use parallel_env, only: parallel_start, parallel_stop, is_root
@@ -16,7 +17,7 @@ program bench_immersed_ladder
   type(sphere_array_case_t) :: case
   type(sphere_array_result_t) :: result
   real(wp) :: errors(3), sizes(3), x(3), y(3), slope, unbounded
-  integer :: f, c, d
+  integer :: f, c, d, resolution
 
   call parallel_start()
   if (is_root()) then
@@ -48,23 +49,25 @@ program bench_immersed_ladder
     print '(a)', '| coupling | cells | D/dx | a/L | T / (8 pi mu a^3 Omega) | steps | wall s |'
     print '(a)', '|---|---|---|---|---|---|---|'
   end if
+  do resolution = 8, 12, 4
   do c = 1, size(couplings)
     do d = 1, 3
       case%rotating = .true.
       case%coupling = couplings(c)
-      case%cells = 8 * (d + 1)
+      case%cells = resolution * (d + 1)
       case%volume_fraction = acos(-1.0_wp) / 6.0_wp / real(d + 1, wp)**3
       call run_sphere_array(case, result)
       x(d) = result%radius_over_box**3
-      y(d) = result%torque(3) / result%stokes_torque
+      y(d) = -result%torque(3) / result%stokes_torque
       if (is_root()) print '(a,a,a,i0,a,f5.2,a,f6.4,a,f8.5,a,i0,a,f6.1,a,a)', '| ', trim(couplings(c)), ' | ', &
           case%cells, '^3 | ', result%diameter_cells, ' | ', result%radius_over_box, ' | ', y(d), ' | ', result%steps, &
           ' | ', result%wall_seconds, merge(' |         ', ' unsteady |', result%steady)
     end do
     slope = (sum(x * y) - sum(x) * sum(y) / 3) / (sum(x**2) - sum(x)**2 / 3)
     unbounded = (sum(y) - slope * sum(x)) / 3
-    if (is_root()) print '(a,a,a,f8.5,a,f6.2,a)', '|   | ', trim(couplings(c)), ': extrapolated to a/L = 0: ', unbounded, &
+    if (is_root()) print '(a,a,a,f8.5,a,f7.2,a)', '|   | ', trim(couplings(c)), ': extrapolated to a/L = 0: ', unbounded, &
         ' (error ', 100 * (unbounded - 1), '%)'
+  end do
   end do
   call parallel_stop()
 end program bench_immersed_ladder
