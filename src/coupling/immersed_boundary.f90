@@ -38,7 +38,15 @@ module immersed_boundary
   implicit none
   private
   public :: immersed_boundary_t, ibm_settings_t, imposition_report_t
-  public :: ibm_set_bodies, ibm_impose, ibm_begin_step, ibm_step_loads, rigid_velocity, cell_divergence_max
+  public :: ibm_set_bodies, ibm_impose, ibm_begin_step, ibm_step_loads, cell_divergence_max
+
+  !> Lever arms r (minimum image of the point - the body's centre, m) of one component's nodes,
+  !> computed once per placement so that an imposition costs only U + Omega x r per node.
+  type :: lever_arms_t
+    real(wp), allocatable :: interior(:, :)   !< (3, n_interior), at the interior nodes
+    real(wp), allocatable :: ghost(:, :)      !< (3, n_ghost), at the ghost nodes G
+    real(wp), allocatable :: surface(:, :)    !< (3, n_ghost), at their surface points B
+  end type lever_arms_t
 
   !> What the deck decides about the imposition.
   type :: ibm_settings_t
@@ -71,6 +79,8 @@ module immersed_boundary
     integer :: halo_planes = 0           !< planes beyond the slab that the stencils reach (every component)
     logical :: remote_ghosts = .false.   !< some stencil (on some rank) holds a ghost node of another rank
     real(wp), allocatable :: below(:, :, :, :), above(:, :, :, :)   !< copies of the neighbours' planes, per component
+    type(lever_arms_t) :: arms(3)        !< per component, for the current placement
+    real(wp), allocatable :: arm_centres(:, :)   !< (3, n) the centres the lever arms were computed for
   end type immersed_boundary_t
 
 contains
@@ -103,7 +113,13 @@ contains
       ibm%fictitious_angular(:, n) = ibm%settings%fluid_density * &
                                      matmul(volume_moment(bodies(n)), angular_velocity(:, n))
     end do
-    if (.not. classify) return
+    if (.not. classify) then
+      ! Unchanged centres (a fixed or only spinning sphere): the lever arms stand.
+      if (any(ibm%arm_centres(1, :) /= ibm%bodies(:)%centre(1)) .or. &
+          any(ibm%arm_centres(2, :) /= ibm%bodies(:)%centre(2)) &
+          .or. any(ibm%arm_centres(3, :) /= ibm%bodies(:)%centre(3))) call compute_lever_arms(ibm, grid)
+      return
+    end if
 
     select case (trim(ibm%settings%coupling))
     case ('implicit')
@@ -135,7 +151,35 @@ contains
       allocate(ibm%below(0:grid%nx + 1, 0:grid%ny + 1, 1 - planes:0, 3))
       allocate(ibm%above(0:grid%nx + 1, 0:grid%ny + 1, grid%nz_local + 1:grid%nz_local + planes, 3))
     end if
+    call compute_lever_arms(ibm, grid)
   end subroutine ibm_set_bodies
+
+  subroutine compute_lever_arms(ibm, grid)
+    type(immersed_boundary_t), intent(inout) :: ibm
+    type(fluid_grid_t), intent(in) :: grid
+    real(wp) :: box(3)
+    integer :: c, m
+    box = [grid%lx, grid%ly, grid%lz]
+    if (allocated(ibm%arm_centres)) deallocate(ibm%arm_centres)
+    allocate(ibm%arm_centres(3, size(ibm%bodies)))
+    do m = 1, size(ibm%bodies)
+      ibm%arm_centres(:, m) = ibm%bodies(m)%centre
+    end do
+    do c = 1, 3
+      associate (nodes => ibm%geometry%component(c), arms => ibm%arms(c))
+        if (allocated(arms%interior)) deallocate(arms%interior, arms%ghost, arms%surface)
+        allocate(arms%interior(3, nodes%n_interior), arms%ghost(3, nodes%n_ghost), arms%surface(3, nodes%n_ghost))
+        do m = 1, nodes%n_interior
+          arms%interior(:, m) = minimum_image(node_position(grid, c, nodes%interior(1, m), nodes%interior(2, m), &
+                                                            nodes%interior(3, m)) - ibm%bodies(nodes%interior_body(m))%centre, box)
+        end do
+        do m = 1, nodes%n_ghost
+          arms%ghost(:, m) = minimum_image(nodes%ghost(m)%position - ibm%bodies(nodes%ghost(m)%body)%centre, box)
+          arms%surface(:, m) = minimum_image(nodes%ghost(m)%surface_point - ibm%bodies(nodes%ghost(m)%body)%centre, box)
+        end do
+      end associate
+    end do
+  end subroutine compute_lever_arms
 
   !> Start a step's load bookkeeping: the impositions of the step add to zeroed momentum changes,
   !> and the fictitious-fluid momentum now set is the step's starting value.
@@ -222,16 +266,21 @@ contains
     call exchange_slab_halos(grid%slab, u, v, w)
   end subroutine ibm_impose
 
-  !> Rigid-body velocity component `component` at x of body n (m/s).
-  pure real(wp) function rigid_velocity(ibm, grid, n, component, x) result(value)
+  !> Rigid-body velocity component `component` of body n at lever arm r: (U + Omega x r)_c (m/s).
+  pure real(wp) function rigid_velocity(ibm, n, component, r) result(value)
     type(immersed_boundary_t), intent(in) :: ibm
-    type(fluid_grid_t), intent(in) :: grid
     integer, intent(in) :: n, component
-    real(wp), intent(in) :: x(3)
-    real(wp) :: r(3), full(3)
-    r = minimum_image(x - ibm%bodies(n)%centre, [grid%lx, grid%ly, grid%lz])
-    full = ibm%velocity(:, n) + cross(ibm%angular_velocity(:, n), r)
-    value = full(component)
+    real(wp), intent(in) :: r(3)
+    associate (omega => ibm%angular_velocity(:, n))
+      select case (component)
+      case (1)
+        value = ibm%velocity(1, n) + omega(2) * r(3) - omega(3) * r(2)
+      case (2)
+        value = ibm%velocity(2, n) + omega(3) * r(1) - omega(1) * r(3)
+      case default
+        value = ibm%velocity(3, n) + omega(1) * r(2) - omega(2) * r(1)
+      end select
+    end associate
   end function rigid_velocity
 
   !> Largest |div u| (1/s) over this rank's cells and over all ranks (collective): after the
@@ -262,16 +311,15 @@ contains
     real(wp), intent(inout) :: field(0:, 0:, 0:)
     real(wp), intent(inout) :: change, scale
     integer :: m, n, node(3)
-    real(wp) :: x(3), value, delta
+    real(wp) :: value, delta
     associate (nodes => ibm%geometry%component(component))
       do m = 1, nodes%n_interior
         node = nodes%interior(:, m)
         n = nodes%interior_body(m)
-        x = node_position(grid, component, node(1), node(2), node(3))
-        value = rigid_velocity(ibm, grid, n, component, x)
+        value = rigid_velocity(ibm, n, component, ibm%arms(component)%interior(:, m))
         delta = value - field(node(1), node(2), node(3))
         field(node(1), node(2), node(3)) = value
-        call account(ibm, grid, n, component, x, delta)
+        call account(ibm, grid, n, component, ibm%arms(component)%interior(:, m), delta)
         change = max(change, abs(delta))
         scale = max(scale, abs(value))
       end do
@@ -290,7 +338,7 @@ contains
     associate (nodes => ibm%geometry%component(component))
       do g = 1, nodes%n_ghost
         associate (ghost => nodes%ghost(g))
-          surface(g) = rigid_velocity(ibm, grid, ghost%body, component, ghost%surface_point)
+          surface(g) = rigid_velocity(ibm, ghost%body, component, ibm%arms(component)%surface(:, g))
           before(g) = field(ghost%node(1), ghost%node(2), ghost%node(3))
           scale = max(scale, abs(surface(g)), abs(before(g)))
         end associate
@@ -366,22 +414,22 @@ contains
     do g = 1, ibm%geometry%component(component)%n_ghost
       associate (ghost => ibm%geometry%component(component)%ghost(g))
         delta = field(ghost%node(1), ghost%node(2), ghost%node(3)) - before(g)
-        call account(ibm, grid, ghost%body, component, ghost%position, delta)
+        call account(ibm, grid, ghost%body, component, ibm%arms(component)%ghost(:, g), delta)
         change = max(change, abs(delta))
       end associate
     end do
   end subroutine account_ghosts
 
-  !> Momentum rho dV delta e_c and angular momentum rho dV r x (delta e_c) added at node x.
-  subroutine account(ibm, grid, n, component, x, delta)
+  !> Momentum rho dV delta e_c and angular momentum rho dV r x (delta e_c) added at the node of
+  !> lever arm r.
+  subroutine account(ibm, grid, n, component, r, delta)
     type(immersed_boundary_t), intent(inout) :: ibm
     type(fluid_grid_t), intent(in) :: grid
     integer, intent(in) :: n, component
-    real(wp), intent(in) :: x(3), delta
-    real(wp) :: r(3), added(3)
+    real(wp), intent(in) :: r(3), delta
+    real(wp) :: added(3)
     added = 0
     added(component) = ibm%settings%fluid_density * grid%cell_volume * delta
-    r = minimum_image(x - ibm%bodies(n)%centre, [grid%lx, grid%ly, grid%lz])
     ibm%momentum_change(:, n) = ibm%momentum_change(:, n) + added
     ibm%angular_change(:, n) = ibm%angular_change(:, n) + cross(r, added)
   end subroutine account
