@@ -86,7 +86,7 @@ module immersed_boundary
 contains
 
   !> Place the bodies with their velocities (at the time level of the next imposition) and, when
-  !> classify is true, classify the nodes again (collective). The first call must classify.
+  !> classify is true, classify the nodes again (collective). The first call always classifies.
   subroutine ibm_set_bodies(ibm, grid, bodies, velocity, angular_velocity, classify)
     type(immersed_boundary_t), intent(inout) :: ibm
     type(fluid_grid_t), intent(in) :: grid
@@ -113,7 +113,7 @@ contains
       ibm%fictitious_angular(:, n) = ibm%settings%fluid_density * &
                                      matmul(volume_moment(bodies(n)), angular_velocity(:, n))
     end do
-    if (.not. classify) then
+    if (.not. classify .and. allocated(ibm%arm_centres)) then
       ! Unchanged centres (a fixed or only spinning sphere): the lever arms stand.
       if (any(ibm%arm_centres(1, :) /= ibm%bodies(:)%centre(1)) .or. &
           any(ibm%arm_centres(2, :) /= ibm%bodies(:)%centre(2)) &
