@@ -16,12 +16,16 @@
 !>     before every sweep when any stencil reaches a ghost node of another rank, else once.
 !>   - coupling 'explicit' (image point 'image', d_M = max(d_G, 1.5 h)): one evaluation of the row
 !>     (G's own weight, where the stencil still holds G, on the diagonal as above).
-!> - Loads by momentum balance: each imposition changes the fluid momentum by
-!>   rho dV sum (u_imposed - u_before) e_c over the ghost and interior nodes of the body (each
-!>   component at its own nodes); the force on the body is minus that change per unit time, summed
-!>   over the impositions of a step, less the rate of change of the momentum of the fictitious fluid
-!>   inside the body, rho_f d/dt(V_p U) (and rho_f d/dt(J Omega) for the torque, J the body's
-!>   second moment of volume). ibm-notes section 8.2.
+!> - Loads by momentum balance (ibm-notes section 8.2): each imposition changes the momentum on the
+!>   grid by rho dV sum (u_imposed - u_before) e_c over the ghost and interior nodes of the body
+!>   (each component at its own nodes). Part of it goes to the fictitious fluid on the body's own
+!>   nodes; the rest is what the body gives the real fluid. So the force on the body is
+!>     F = -(1/dt) [sum over both impositions of rho dV sum (u_imposed - u_before) e_c]
+!>         + (1/dt) rho dV sum_{nodes of the body at n+1} (u^{n+1} - u^n) e_c,
+!>   the second term the discrete rate of change of the fictitious fluid's momentum, rho_f d/dt(V U)
+!>   for a rigid body. Taken over the nodes the body holds at n+1, it also carries the momentum a
+!>   node brings when it is covered or leaves when it is uncovered, so a change of status adds no
+!>   spike u/dt to the force (docs/theory.md). The torque likewise with r x.
 module immersed_boundary
   use, intrinsic :: iso_fortran_env, only: int8
   use mpi_f08, only: MPI_Sendrecv, MPI_Allreduce, MPI_IN_PLACE, MPI_SUM, MPI_MAX, MPI_LOR, MPI_LOGICAL, MPI_INTEGER, &
@@ -32,7 +36,6 @@ module immersed_boundary
   use periodic_box, only: minimum_image
   use fluid_grid, only: fluid_grid_t
   use halo_exchange, only: exchange_slab_halos
-  use quaternion, only: rotation_matrix
   use immersed_geometry, only: immersed_body_t, immersed_options_t, immersed_geometry_t, component_nodes_t, &
                                classify_nodes, node_position, node_ghost
   implicit none
@@ -73,9 +76,9 @@ module immersed_boundary
     real(wp), allocatable :: angular_velocity(:, :)   !< (3, n) rad/s, Omega
     real(wp), allocatable :: momentum_change(:, :)    !< (3, n) kg m/s added to the fluid this step
     real(wp), allocatable :: angular_change(:, :)     !< (3, n) kg m^2/s added to the fluid this step
-    real(wp), allocatable :: fictitious_momentum(:, :)   !< (3, n) rho_f V U at the last ibm_set_bodies
-    real(wp), allocatable :: fictitious_angular(:, :)    !< (3, n) rho_f J Omega
-    real(wp), allocatable :: fictitious_momentum_old(:, :), fictitious_angular_old(:, :)   !< at the step's start
+    !> (6, n) momentum (1:3) and angular momentum (4:6) change of the fictitious fluid on each body's
+    !> nodes over the step: this rank's part during the step, the global sum after ibm_step_loads
+    real(wp), allocatable :: inertia_change(:, :)
     integer :: halo_planes = 0           !< planes beyond the slab that the stencils reach (every component)
     logical :: remote_ghosts = .false.   !< some stencil (on some rank) holds a ghost node of another rank
     real(wp), allocatable :: below(:, :, :, :), above(:, :, :, :)   !< copies of the neighbours' planes, per component
@@ -101,18 +104,12 @@ contains
     n = size(bodies)
     if (.not. allocated(ibm%bodies)) then
       allocate(ibm%velocity(3, n), ibm%angular_velocity(3, n), ibm%momentum_change(3, n), ibm%angular_change(3, n))
-      allocate(ibm%fictitious_momentum(3, n), ibm%fictitious_angular(3, n))
-      allocate(ibm%fictitious_momentum_old(3, n), ibm%fictitious_angular_old(3, n))
-      ibm%momentum_change = 0; ibm%angular_change = 0
+      allocate(ibm%inertia_change(6, n))
+      ibm%momentum_change = 0; ibm%angular_change = 0; ibm%inertia_change = 0
     end if
     ibm%bodies = bodies
     ibm%velocity = velocity
     ibm%angular_velocity = angular_velocity
-    do n = 1, size(bodies)
-      ibm%fictitious_momentum(:, n) = ibm%settings%fluid_density * bodies(n)%shape%volume * velocity(:, n)
-      ibm%fictitious_angular(:, n) = ibm%settings%fluid_density * &
-                                     matmul(volume_moment(bodies(n)), angular_velocity(:, n))
-    end do
     if (.not. classify .and. allocated(ibm%arm_centres)) then
       ! Unchanged centres (a fixed or only spinning sphere): the lever arms stand.
       if (any(ibm%arm_centres(1, :) /= ibm%bodies(:)%centre(1)) .or. &
@@ -181,34 +178,77 @@ contains
     end do
   end subroutine compute_lever_arms
 
-  !> Start a step's load bookkeeping: the impositions of the step add to zeroed momentum changes,
-  !> and the fictitious-fluid momentum now set is the step's starting value.
-  subroutine ibm_begin_step(ibm)
+  !> Start a step's load bookkeeping (call after ibm_set_bodies has placed the bodies at t^{n+1},
+  !> with u^n in u, v, w): the impositions of the step add to zeroed momentum changes, and the
+  !> fictitious fluid's change starts from minus the momentum of u^n on the bodies' new nodes.
+  subroutine ibm_begin_step(ibm, grid, u, v, w)
     type(immersed_boundary_t), intent(inout) :: ibm
+    type(fluid_grid_t), intent(in) :: grid
+    real(wp), intent(in) :: u(0:, 0:, 0:), v(0:, 0:, 0:), w(0:, 0:, 0:)
     ibm%momentum_change = 0
     ibm%angular_change = 0
-    ibm%fictitious_momentum_old = ibm%fictitious_momentum
-    ibm%fictitious_angular_old = ibm%fictitious_angular
+    ibm%inertia_change = 0
+    call add_body_momentum(ibm, grid, u, v, w, -1.0_wp)
   end subroutine ibm_begin_step
 
   !> Force (N) and torque (N m, about each centre) on every body over the step of length dt (call
-  !> after the step's impositions and ibm_set_bodies with the new velocities): minus the momentum
-  !> the impositions added to the fluid per unit time (summed over the ranks; collective), minus
-  !> the rate of change of the fictitious fluid's momentum.
-  subroutine ibm_step_loads(ibm, dt, force, torque)
+  !> after the step's impositions, with u^{n+1} in u, v, w; collective): minus the momentum the
+  !> impositions added per unit time, plus the rate of change of the fictitious fluid's momentum
+  !> on the body's nodes (summed over the ranks).
+  subroutine ibm_step_loads(ibm, grid, u, v, w, dt, force, torque)
     type(immersed_boundary_t), intent(inout) :: ibm
+    type(fluid_grid_t), intent(in) :: grid
+    real(wp), intent(in) :: u(0:, 0:, 0:), v(0:, 0:, 0:), w(0:, 0:, 0:)
     real(wp), intent(in) :: dt
     real(wp), intent(out) :: force(:, :), torque(:, :)
     real(wp), allocatable :: total(:, :)
     integer :: n
+    call add_body_momentum(ibm, grid, u, v, w, 1.0_wp)
     n = size(ibm%bodies)
-    allocate(total(6, n))
+    allocate(total(12, n))
     total(1:3, :) = ibm%momentum_change
     total(4:6, :) = ibm%angular_change
-    call MPI_Allreduce(MPI_IN_PLACE, total, 6 * n, mpi_wp, MPI_SUM, world)
-    force = -total(1:3, :) / dt - (ibm%fictitious_momentum - ibm%fictitious_momentum_old) / dt
-    torque = -total(4:6, :) / dt - (ibm%fictitious_angular - ibm%fictitious_angular_old) / dt
+    total(7:12, :) = ibm%inertia_change
+    call MPI_Allreduce(MPI_IN_PLACE, total, 12 * n, mpi_wp, MPI_SUM, world)
+    ibm%inertia_change = total(7:12, :)
+    force = (-total(1:3, :) + total(7:9, :)) / dt
+    torque = (-total(4:6, :) + total(10:12, :)) / dt
   end subroutine ibm_step_loads
+
+  !> inertia_change += sign rho dV sum (u e_c and r x u e_c) over every body's ghost and interior nodes.
+  subroutine add_body_momentum(ibm, grid, u, v, w, sign)
+    type(immersed_boundary_t), intent(inout) :: ibm
+    type(fluid_grid_t), intent(in) :: grid
+    real(wp), intent(in) :: u(0:, 0:, 0:), v(0:, 0:, 0:), w(0:, 0:, 0:)
+    real(wp), intent(in) :: sign
+    call add_component(1, u)
+    call add_component(2, v)
+    call add_component(3, w)
+  contains
+    subroutine add_component(c, field)
+      integer, intent(in) :: c
+      real(wp), intent(in) :: field(0:, 0:, 0:)
+      real(wp) :: added(3), factor
+      integer :: m, n
+      factor = sign * ibm%settings%fluid_density * grid%cell_volume
+      associate (nodes => ibm%geometry%component(c), arms => ibm%arms(c))
+        do m = 1, nodes%n_interior
+          n = nodes%interior_body(m)
+          added = 0
+          added(c) = factor * field(nodes%interior(1, m), nodes%interior(2, m), nodes%interior(3, m))
+          ibm%inertia_change(1:3, n) = ibm%inertia_change(1:3, n) + added
+          ibm%inertia_change(4:6, n) = ibm%inertia_change(4:6, n) + cross(arms%interior(:, m), added)
+        end do
+        do m = 1, nodes%n_ghost
+          n = nodes%ghost(m)%body
+          added = 0
+          added(c) = factor * field(nodes%ghost(m)%node(1), nodes%ghost(m)%node(2), nodes%ghost(m)%node(3))
+          ibm%inertia_change(1:3, n) = ibm%inertia_change(1:3, n) + added
+          ibm%inertia_change(4:6, n) = ibm%inertia_change(4:6, n) + cross(arms%ghost(:, m), added)
+        end do
+      end associate
+    end subroutine add_component
+  end subroutine add_body_momentum
 
   !> Impose the interior and ghost values on u, v, w (collective) and refresh their halos; the
   !> momentum the imposition adds goes into the step's load bookkeeping. Stops the run when the
@@ -471,22 +511,6 @@ contains
       end if
     end do
   end function any_remote_ghost
-
-  !> Second moment of volume J = integral (|r|^2 I - r r^T) dV of a body in the lab frame (m^5):
-  !> body-frame principal values V (2 b^2)/5 about the symmetry axis, V (a^2 + b^2)/5 across it.
-  pure function volume_moment(body) result(j)
-    type(immersed_body_t), intent(in) :: body
-    real(wp) :: j(3, 3), r(3, 3), principal(3)
-    integer :: d
-    associate (a => body%shape%a, b => body%shape%b, volume => body%shape%volume)
-      principal = [2.0_wp * b**2, a**2 + b**2, a**2 + b**2] * volume / 5.0_wp
-    end associate
-    r = rotation_matrix(body%orientation)
-    j = 0
-    do d = 1, 3
-      j = j + principal(d) * spread(r(:, d), 2, 3) * spread(r(:, d), 1, 3)
-    end do
-  end function volume_moment
 
   pure function cross(a, b) result(c)
     real(wp), intent(in) :: a(3), b(3)

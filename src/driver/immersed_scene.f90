@@ -90,8 +90,8 @@ contains
     type(fluid_solver_t), intent(inout) :: solver
     real(wp), intent(in) :: dt
     call timer_tic(scene%timer)
-    call ibm_begin_step(scene%ibm)
     call place_bodies(scene, solver, solver%time + dt, classify=scene%moving)
+    call ibm_begin_step(scene%ibm, solver%grid, solver%u, solver%v, solver%w)
     call timer_toc(scene%timer)
     call fluid_predict(solver, dt, force_u=scene%force_u, force_v=scene%force_v, force_w=scene%force_w)
     call timer_tic(scene%timer)
@@ -102,9 +102,9 @@ contains
     call timer_tic(scene%timer)
     call ibm_impose(scene%ibm, solver%grid, solver%u, solver%v, solver%w, scene%projected)
     scene%divergence = cell_divergence_max(solver%grid, solver%u, solver%v, solver%w)
+    call ibm_step_loads(scene%ibm, solver%grid, solver%u, solver%v, solver%w, dt, scene%force, scene%torque)
     call timer_toc(scene%timer)
     call fluid_finish_step(solver)
-    call ibm_step_loads(scene%ibm, dt, scene%force, scene%torque)
   end subroutine immersed_step
 
   subroutine place_bodies(scene, solver, time, classify)

@@ -48,8 +48,8 @@ program test_immersed_boundary
       ibm = immersed_boundary_t()
       ibm%settings%coupling = couplings(trial)
       call ibm_set_bodies(ibm, grid, bodies, velocity, angular_velocity, classify=.true.)
-      call ibm_begin_step(ibm)
       call fill_rigid(1, u); call fill_rigid(2, v); call fill_rigid(3, w)
+      call ibm_begin_step(ibm, grid, u, v, w)
       u0 = u; v0 = v; w0 = w
       call ibm_impose(ibm, grid, u, v, w, report)
       ! Interior nodes only: the imposition ends with the periodic halo exchange, and the linear field
