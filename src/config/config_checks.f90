@@ -53,9 +53,6 @@ contains
         'predictor with the immersed-boundary ghost rows is not available yet)')
     if (cfg%scene%forcing /= 'none') call input_error('scene', 'forcing', ''''//trim(cfg%scene%forcing)// &
         ''' with particles = ''prescribed''', '''none'' (drive the flow with &bodies driving_force)')
-    if (cfg%fluid%pressure_scheme /= 'incremental') call input_error('fluid', 'pressure_scheme', ''''// &
-        trim(cfg%fluid%pressure_scheme)//''' with &scene particles = ''prescribed''', '''incremental'' (the '// &
-        'immersed boundary needs the old pressure gradient in u*, docs/theory.md)')
   end subroutine check_prescribed_cross
 
   !> Resolved fluid: the grid must split into equal slabs along z and y (pencil transposes of the FFT).

@@ -130,6 +130,9 @@ contains
       call immersed_scene_create(bodies, solver, motions_from_config(cfg%bodies, solver%grid), settings, &
                                  cfg%bodies%driving_force)
       call loads_open(bodies, run_file('bodies_loads.dat'), append=cfg%run%restart)
+      if (bodies%moving .and. solver%incremental_pressure) call log_line('immersed boundary: note: moving '// &
+          'bodies with &fluid pressure_scheme = ''incremental'' give force spikes when nodes are uncovered '// &
+          '(the pressure inside a body enters u*); ''non_incremental'' avoids them (docs/validation.md)')
       call log_line('immersed boundary: '//trim(cfg%scene%ibm_coupling)//' coupling, '// &
           int_text(cfg%bodies%count)//' bodies, loads every step in '//run_file('bodies_loads.dat'))
     end subroutine start_bodies

@@ -4,9 +4,10 @@
 !> - ghost rows converge in at most 10 Jacobi sweeps to 1e-12 (rung 2);
 !> - at steady state the momentum-balance load equals the drive on the cell, F = f L^3 (the fluid
 !>   momentum no longer changes);
-!> - the global momentum budget of the box, P^{n+1} - P^n = dt (f L^3 - sum of the body forces -
-!>   rate of the fictitious momentum), closes to 1e-10 relative over steps of a sphere that moves
-!>   (translation and oscillation: nodes change status) in a driven, non-steady flow.
+!> - the global momentum budget of the box, P^{n+1} - P^n = dt (f L^3 - sum of the body forces) +
+!>   the fictitious fluid's momentum change on the bodies' nodes, closes to 1e-10 relative over steps
+!>   of a translating, oscillating sphere and a rotating needle (nodes change status) in a driven,
+!>   non-steady flow.
 program test_immersed_stokes
   use agglo_kinds, only: wp
   use parallel_env, only: parallel_start, global_sum
@@ -57,8 +58,9 @@ program test_immersed_stokes
 
 contains
 
-  !> A sphere translating and oscillating through a driven flow that starts from rest: each step,
-  !> the box's momentum change equals dt (f L^3 - sum_b (F_b + d/dt rho_f V U_b)).
+  !> A sphere translating and oscillating and a rotating needle in a driven flow that starts from
+  !> rest: each step, the box's momentum change equals dt (f L^3 - sum_b F_b) + sum_b (the momentum
+  !> change of the fictitious fluid on body b's nodes).
   subroutine check_momentum_budget(coupling)
     character(len=*), intent(in) :: coupling
     type(grid_config_t) :: grid_cfg
