@@ -233,7 +233,8 @@ contains
     type(immersed_scene_t), intent(inout) :: scene
     if (scene%loads_opened) close(scene%loads_unit)
     scene%loads_opened = .false.
-    call log_line('immersed scene: last step sweeps '//int_text(scene%predicted%sweeps)// &
+    call log_line('immersed scene: last step sweeps '//int_text(scene%predicted%sweeps)//' (plane exchanges '// &
+                  int_text(scene%predicted%exchanges)//')'// &
                   ', residual '//real_text(scene%predicted%residual)//', slip '// &
                   real_text(scene%projected%largest_change)//', cut-cell divergence '//real_text(scene%divergence)//' 1/s')
   end subroutine loads_close
