@@ -83,7 +83,7 @@ else
   Q = @echo "  $(notdir $@)";
 endif
 
-.PHONY: help deps build run test bench clean tools-deps
+.PHONY: help deps build run test bench validate clean tools-deps
 .SECONDARY:
 help: ## list the targets
 	@echo "Agglo - make targets (MODE=release|debug, ARCH=native|x86-64-v3|..., BUILD=dir, NP=ranks, DECK=deck for run):"
@@ -160,6 +160,10 @@ $(VENV)/.requirements-installed: tools/requirements.txt
 bench: deps ## run the benchmarks (results for docs/performance.md)
 	@$(MAKE) --no-print-directory build $(BENCH_PROGRAMS)
 	@BUILD=$(BUILD) tools/bench.sh
+
+validate: deps ## run the immersed-boundary validation ladder (the table in docs/validation.md)
+	@$(MAKE) --no-print-directory build $(BUILD)/bench/bench_immersed_ladder
+	$(MPIRUN) -np 1 $(BUILD)/bench/bench_immersed_ladder
 
 clean: ## remove the build directory
 	rm -rf $(BUILD)

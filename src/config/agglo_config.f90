@@ -11,6 +11,7 @@ module agglo_config
   use config_collision, only: collision_config_t, write_collision_group
   use namelist_text, only: namelist_item_t, read_namelist_items
   use error_handling, only: fatal
+  use config_bodies, only: bodies_config_t, write_bodies_group
   implicit none
   private
   public :: agglo_config_t, deck_group_names, write_config, config_items
@@ -25,12 +26,13 @@ module agglo_config
     type(pair_config_t) :: pair
     type(dlvo_config_t) :: dlvo
     type(collision_config_t) :: collision
+    type(bodies_config_t) :: bodies
     character(len=4096) :: deck_path = ''    !< the deck file this configuration came from (PATH_MAX)
   end type agglo_config_t
 
   !> Every namelist group a deck may contain.
-  character(len=16), parameter :: deck_group_names(9) = [character(len=16) :: &
-      'run', 'scene', 'grid', 'fluid', 'forcing', 'pair', 'dlvo', 'collision', 'output']
+  character(len=16), parameter :: deck_group_names(10) = [character(len=16) :: &
+      'run', 'scene', 'grid', 'fluid', 'forcing', 'pair', 'dlvo', 'collision', 'output', 'bodies']
 
 contains
 
@@ -47,6 +49,7 @@ contains
     call write_dlvo_group(unit, cfg%dlvo)
     call write_collision_group(unit, cfg%collision)
     call write_output_group(unit, cfg%output)
+    call write_bodies_group(unit, cfg%bodies)
   end subroutine write_config
 
   !> Every variable of the configuration as (group, name, value text), through its own namelist

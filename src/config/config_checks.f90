@@ -18,7 +18,7 @@ contains
     integer, intent(in) :: nranks
     if (cfg%scene%fluid == 'resolved') call check_fluid_cross(cfg, nranks)
     if (cfg%scene%forcing /= 'none') call check_forcing_cross(cfg)
-    if (cfg%scene%particles /= 'none') call check_particle_cross(cfg)
+    if (cfg%scene%particles == 'pair') call check_particle_cross(cfg)
   end subroutine check_cross_groups
 
   !> Every variable of every group, whether the scene uses it or not, through the configuration's own
@@ -65,10 +65,12 @@ contains
         ''''//trim(cfg%scene%forcing)//''' with fluid = '''//trim(cfg%scene%fluid)//'''', '''none'' unless '// &
         'fluid = ''resolved'' (the forcing drives the resolved fluid; a fluid-free or Stokes scene has no '// &
         'velocity field)')
-    if (cfg%scene%fluid == 'resolved' .and. cfg%scene%particles /= 'none') call fatal( &
-        'deck: &scene fluid = ''resolved'' with particles = '''//trim(cfg%scene%particles)// &
-        ''' needs the immersed-boundary coupling, which this version does not have yet; '// &
-        'use fluid = ''none'' or ''stokes'' for particle runs, or particles = ''none''')
+    if (cfg%scene%fluid == 'resolved' .and. cfg%scene%particles == 'pair') call fatal( &
+        'deck: &scene fluid = ''resolved'' with particles = ''pair'' needs the immersed-boundary coupling '// &
+        'of freely moving particles, which this version does not have yet; use fluid = ''none'' or '// &
+        '''stokes'' for pair runs, or '// &
+        'particles = ''prescribed'' with &bodies for bodies in prescribed motion')
+    if (cfg%scene%particles == 'prescribed') call check_prescribed_cross(cfg)
     if (cfg%scene%fluid /= 'resolved' .and. cfg%scene%particles == 'none') call input_error('scene', &
         'particles', '''none'' with fluid = '''//trim(cfg%scene%fluid)//'''', &
         '''pair'' (a fluid-free or Stokes scene has nothing to compute without particles)')
@@ -79,6 +81,18 @@ contains
         'particle_substeps', int_text(cfg%scene%particle_substeps)//' with fluid = '''//trim(cfg%scene%fluid)//'''', &
         '1 (sub-steps split a fluid step; without a resolved fluid set &run dt itself)')
   end subroutine check_scene_combinations
+
+  !> Bodies in prescribed motion: resolved fluid, explicit diffusion, no Eswaran-Pope forcing.
+  subroutine check_prescribed_cross(cfg)
+    type(agglo_config_t), intent(in) :: cfg
+    if (cfg%scene%fluid /= 'resolved') call input_error('scene', 'particles', '''prescribed'' with fluid = '''// &
+        trim(cfg%scene%fluid)//'''', 'fluid = ''resolved'' (bodies in prescribed motion need the resolved fluid)')
+    if (cfg%fluid%viscous_scheme == 'crank_nicolson') call input_error('fluid', 'viscous_scheme', &
+        '''crank_nicolson'' with &scene particles = ''prescribed''', '''explicit'' (the Crank-Nicolson '// &
+        'predictor with the immersed-boundary ghost rows is not available yet)')
+    if (cfg%scene%forcing /= 'none') call input_error('scene', 'forcing', ''''//trim(cfg%scene%forcing)// &
+        ''' with particles = ''prescribed''', '''none'' (drive the flow with &bodies driving_force)')
+  end subroutine check_prescribed_cross
 
   !> Resolved fluid: the grid must split into equal slabs along z and y (pencil transposes of the FFT).
   subroutine check_fluid_cross(cfg, nranks)

@@ -14,6 +14,7 @@ module config_reader
   use config_pair, only: read_pair_group, check_pair_group
   use config_dlvo, only: read_dlvo_group, check_dlvo_group
   use config_collision, only: read_collision_group, check_collision_group
+  use config_bodies, only: read_bodies_group, check_bodies_group
   implicit none
   private
   public :: read_config, parse_config, read_groups, apply_override
@@ -64,7 +65,8 @@ contains
     if (cfg%scene%fluid /= 'none') call check_fluid_group(cfg%fluid)
     if (cfg%scene%fluid == 'resolved') call check_grid_group(cfg%grid)
     if (cfg%scene%forcing /= 'none') call check_forcing_group(cfg%forcing)
-    if (cfg%scene%particles /= 'none') then
+    if (cfg%scene%particles == 'prescribed') call check_bodies_group(cfg%bodies)
+    if (cfg%scene%particles == 'pair') then
       call check_pair_group(cfg%pair)
       if (cfg%scene%dlvo) call check_dlvo_group(cfg%dlvo)
       if (cfg%scene%collisions) call check_collision_group(cfg%collision)
@@ -85,6 +87,7 @@ contains
     call read_dlvo_group(deck, cfg%dlvo)
     call read_collision_group(deck, cfg%collision)
     call read_output_group(deck, cfg%output)
+    call read_bodies_group(deck, cfg%bodies)
   end subroutine read_groups
 
   !> Merge one "group.variable=value" into the deck text: the assignment goes on its own line just

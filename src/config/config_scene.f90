@@ -8,7 +8,7 @@ module config_scene
 
   type :: scene_config_t
     character(len=16) :: fluid = 'resolved'       !< 'none' | 'stokes' | 'resolved'
-    character(len=16) :: particles = 'none'       !< 'none' | 'pair'
+    character(len=16) :: particles = 'none'       !< 'none' | 'pair' | 'prescribed' (&bodies, resolved fluid)
     character(len=16) :: forcing = 'none'         !< 'none' | 'eswaran_pope' (resolved fluid only)
     character(len=16) :: ibm_coupling = 'implicit' !< 'implicit' | 'explicit' (resolved fluid with particles)
     logical :: dlvo = .true.                      !< DLVO forces between the particles
@@ -49,7 +49,7 @@ contains
   subroutine check_scene_group(cfg)
     type(scene_config_t), intent(in) :: cfg
     call require_option('scene', 'fluid', cfg%fluid, [character(len=8) :: 'none', 'stokes', 'resolved'])
-    call require_option('scene', 'particles', cfg%particles, [character(len=8) :: 'none', 'pair'])
+    call require_option('scene', 'particles', cfg%particles, [character(len=10) :: 'none', 'pair', 'prescribed'])
     call require_option('scene', 'forcing', cfg%forcing, [character(len=12) :: 'none', 'eswaran_pope'])
     call require_option('scene', 'ibm_coupling', cfg%ibm_coupling, [character(len=8) :: 'implicit', 'explicit'])
     call require_positive_int('scene', 'particle_substeps', cfg%particle_substeps)

@@ -1,11 +1,13 @@
-!> The resolved scene: DNS of the periodic box (fluid only until the immersed boundary lands).
+!> The resolved scene: DNS of the periodic box, without bodies or with bodies in prescribed motion
+!> (&scene particles = 'prescribed', the immersed boundary: immersed_scene).
 !> The loop follows docs/design.md's data flow: time step -> momentum predictor + projection
-!> (fluid_advance) -> statistics, health check, output, checkpoint.
+!> (fluid_advance; with bodies the staged step of immersed_step) -> statistics, health check,
+!> output, checkpoint.
 module resolved_scene
   use agglo_kinds, only: wp, i8
   use agglo_config, only: agglo_config_t
   use error_handling, only: fatal
-  use text_format, only: real_text
+  use text_format, only: real_text, int_text
   use logger, only: log_line
   use wall_clock, only: wall_time
   use run_directory, only: run_file
@@ -23,6 +25,9 @@ module resolved_scene
                             forcing_driver_power_input, forcing_driver_write_checkpoint, forcing_driver_finish
   use flow_statistics_output, only: flow_output_t, flow_output_start, flow_output_due, flow_output_record, &
                                     flow_output_finish
+  use immersed_boundary, only: ibm_settings_t
+  use immersed_scene, only: immersed_scene_t, immersed_scene_create, immersed_step, motions_from_config, &
+                            loads_open, loads_write, loads_close
   implicit none
   private
   public :: run_resolved_scene
@@ -36,6 +41,8 @@ contains
     type(forcing_driver_t) :: forcing   ! Eswaran-Pope body force (inactive when off)
     type(flow_output_t) :: flow         ! flow statistics (u_rms, epsilon, Re_lambda, spectrum), if switched on
     type(checkpoint_t) :: restart       ! the checkpoint continued from (open only while restoring)
+    type(immersed_scene_t) :: bodies    ! immersed bodies in prescribed motion (particles = 'prescribed')
+    logical :: with_bodies
     real(wp) :: dt, rate, viscous_limit, next_field_time, start_wall, step_wall
     integer(i8) :: first_step
     integer :: timer_io
@@ -46,6 +53,8 @@ contains
     call forcing_driver_start(forcing, cfg, solver, restart)
     if (cfg%run%restart) call checkpoint_close(restart)   ! every component has its state back
     call flow_output_start(flow, cfg, solver)
+    with_bodies = (cfg%scene%particles == 'prescribed')
+    if (with_bodies) call start_bodies()
     viscous_limit = huge(1.0_wp)
     if (.not. solver%crank_nicolson) viscous_limit = explicit_viscous_limit(solver%grid%dx, solver%grid%dy, &
                                                                             solver%grid%dz, solver%viscosity)
@@ -66,7 +75,12 @@ contains
     do while (solver%time < cfg%run%end_time .and. solver%step < cfg%run%max_steps)
       dt = next_time_step(cfg%run%dt_mode, cfg%run%dt, cfg%run%cfl_target, rate, viscous_limit, solver%time, &
                           cfg%run%end_time)
-      call forced_fluid_advance(forcing, solver, dt)   ! fluid_advance with the body force f^n, then f^n+1
+      if (with_bodies) then
+        call immersed_step(bodies, solver, dt)
+        call loads_write(bodies, solver%step, solver%time)
+      else
+        call forced_fluid_advance(forcing, solver, dt)   ! fluid_advance with the body force f^n, then f^n+1
+      end if
 
       call advective_rate(solver, rate, finite)
       if (.not. finite) call stop_run(solver, 'the velocity field is no longer finite (NaN or infinity) at step ')
@@ -82,6 +96,9 @@ contains
         call progress_line(solver%step, solver%time, dt, (wall_time() - step_wall) / cfg%run%progress_interval, &
             min(real(cfg%run%max_steps - solver%step, wp), (cfg%run%end_time - solver%time) / dt))
         step_wall = wall_time()
+        if (with_bodies) call log_line('immersed boundary: sweeps '//int_text(bodies%predicted%sweeps)// &
+            ', residual '//real_text(bodies%predicted%residual)//', slip after projection '// &
+            real_text(bodies%projected%largest_change)//', cut-cell divergence '//real_text(bodies%divergence)//' 1/s')
       end if
       if (solver%time >= next_field_time * (1.0_wp - 1.0e-12_wp) .and. solver%time < cfg%run%end_time) then
         call output_fields(solver)
@@ -98,12 +115,29 @@ contains
     call statistics_close()
     call forcing_driver_finish(forcing, solver)
     call flow_output_finish(flow)
+    if (with_bodies) call loads_close(bodies)
     call timing_report(solver%step - first_step, wall_time() - start_wall)
     call log_line('resolved scene: '//trim(cfg%run%name)//' reached t = '//real_text(solver%time)//' s; '// &
         'time series '//run_file('fluid_statistics.dat')//', fields '//run_file('fields.xdmf')// &
         ', checkpoints '//run_file('checkpoints'))
 
   contains
+
+    subroutine start_bodies()
+      type(ibm_settings_t) :: settings
+      settings%coupling = cfg%scene%ibm_coupling
+      settings%tolerance = cfg%bodies%ghost_tolerance
+      settings%max_sweeps = cfg%bodies%max_sweeps
+      settings%fluid_density = cfg%fluid%density
+      call immersed_scene_create(bodies, solver, motions_from_config(cfg%bodies, solver%grid), settings, &
+                                 cfg%bodies%driving_force)
+      call loads_open(bodies, run_file('bodies_loads.dat'), append=cfg%run%restart)
+      if (bodies%moving .and. solver%incremental_pressure) call log_line('immersed boundary: note: moving '// &
+          'bodies with &fluid pressure_scheme = ''incremental'' give force spikes when nodes are uncovered '// &
+          '(the pressure inside a body enters u*); ''non_incremental'' avoids them (docs/validation.md)')
+      call log_line('immersed boundary: '//trim(cfg%scene%ibm_coupling)//' coupling, '// &
+          int_text(cfg%bodies%count)//' bodies, loads every step in '//run_file('bodies_loads.dat'))
+    end subroutine start_bodies
 
     subroutine output_fields(solver)
       type(fluid_solver_t), intent(inout) :: solver

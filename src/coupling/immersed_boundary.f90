@@ -1,0 +1,520 @@
+!> The immersed-boundary imposition on the staggered velocity components and the hydrodynamic loads
+!> by momentum balance (docs/theory.md, "Immersed boundary: imposition and loads").
+!>
+!> For rigid bodies with a given velocity U and angular velocity Omega about the centre c, the rigid
+!> velocity at a point x is u_rigid(x) = U + Omega x r, r = minimum image of x - c.
+!> - Interior nodes (immersed_geometry) take u_rigid at the node.
+!> - Ghost node G, surface point B, image point M = B + d_M n, kappa = d_G/d_M: the ghost row
+!>     (1 + kappa w_G) u_G = (1 + kappa) u_B - kappa sum_{j /= G} w_j u_j,   u_B = u_rigid(B)
+!>   (the paper's Eq. 7, u_G = 2 u_IB - u_E, for the pure mirror kappa = 1; Mark & van Wachem 2008,
+!>   anderson2025-methods Eq. 7), u_M = sum_j w_j u_j trilinear on the component's own grid.
+!>   - coupling 'implicit' (image point 'mirror', d_M = d_G): the stencils hold other ghost nodes,
+!>     so the ghost rows form a coupled system, solved by Jacobi sweeps over the ghost list to a
+!>     tolerance. Jacobi (every new value from the previous sweep's values) rather than Gauss-Seidel
+!>     so that the result does not depend on the ranks' ordering: 1 and 2 ranks agree to round-off.
+!>     Stencil corners on another rank are read from copies of the neighbours' planes refreshed
+!>     before every sweep when any stencil reaches a ghost node of another rank, else once.
+!>   - coupling 'explicit' (image point 'image', d_M = max(d_G, 1.5 h)): one evaluation of the row
+!>     (G's own weight, where the stencil still holds G, on the diagonal as above).
+!> - Loads by momentum balance (ibm-notes section 8.2): each imposition changes the momentum on the
+!>   grid by rho dV sum (u_imposed - u_before) e_c over the ghost and interior nodes of the body
+!>   (each component at its own nodes). Part of it goes to the fictitious fluid on the body's own
+!>   nodes; the rest is what the body gives the real fluid. So the force on the body is
+!>     F = -(1/dt) [sum over both impositions of rho dV sum (u_imposed - u_before) e_c]
+!>         + (1/dt) rho dV sum_{nodes of the body at n+1} (u^{n+1} - u^n) e_c,
+!>   the second term the discrete rate of change of the fictitious fluid's momentum, rho_f d/dt(V U)
+!>   for a rigid body. Taken over the nodes the body holds at n+1, it also carries the momentum a
+!>   node brings when it is covered or leaves when it is uncovered, so a change of status adds no
+!>   spike u/dt to the force (docs/theory.md). The torque likewise with r x.
+module immersed_boundary
+  use, intrinsic :: iso_fortran_env, only: int8
+  use mpi_f08, only: MPI_Sendrecv, MPI_Allreduce, MPI_IN_PLACE, MPI_SUM, MPI_MAX, MPI_LOR, MPI_LOGICAL, MPI_INTEGER, &
+                     MPI_STATUS_IGNORE
+  use agglo_kinds, only: wp
+  use error_handling, only: fatal
+  use parallel_env, only: world, mpi_wp, global_max
+  use periodic_box, only: minimum_image
+  use fluid_grid, only: fluid_grid_t
+  use halo_exchange, only: exchange_slab_halos
+  use immersed_geometry, only: immersed_body_t, immersed_options_t, immersed_geometry_t, component_nodes_t, &
+                               classify_nodes, node_position, node_ghost
+  implicit none
+  private
+  public :: immersed_boundary_t, ibm_settings_t, imposition_report_t
+  public :: ibm_set_bodies, ibm_impose, ibm_begin_step, ibm_step_loads, cell_divergence_max
+
+  !> Lever arms r (minimum image of the point - the body's centre, m) of one component's nodes,
+  !> computed once per placement so that an imposition costs only U + Omega x r per node.
+  type :: lever_arms_t
+    real(wp), allocatable :: interior(:, :)   !< (3, n_interior), at the interior nodes
+    real(wp), allocatable :: ghost(:, :)      !< (3, n_ghost), at the ghost nodes G
+    real(wp), allocatable :: surface(:, :)    !< (3, n_ghost), at their surface points B
+  end type lever_arms_t
+
+  !> What the deck decides about the imposition.
+  type :: ibm_settings_t
+    character(len=16) :: coupling = 'implicit'   !< 'implicit' (pure mirror, sweeps) | 'explicit' (image point, one pass)
+    real(wp) :: tolerance = 1.0e-12_wp           !< largest ghost change of the last sweep / velocity scale
+    integer :: max_sweeps = 50                   !< sweeps before the run stops (implicit)
+    real(wp) :: fluid_density = 1.0_wp           !< kg/m^3, rho_f of the loads
+  end type ibm_settings_t
+
+  !> What one imposition did (for the log).
+  type :: imposition_report_t
+    integer :: sweeps = 0               !< Jacobi sweeps (1 for the explicit coupling)
+    integer :: exchanges = 0            !< plane exchanges with the neighbouring ranks
+    real(wp) :: residual = 0            !< largest ghost change in the last sweep / velocity scale
+    real(wp) :: largest_change = 0      !< largest |u_imposed - u_before| over ghost and interior nodes / scale
+    real(wp) :: velocity_scale = 0      !< m/s, the scale of residual and largest_change
+  end type imposition_report_t
+
+  type :: immersed_boundary_t
+    type(ibm_settings_t) :: settings
+    type(immersed_geometry_t) :: geometry
+    type(immersed_body_t), allocatable :: bodies(:)
+    real(wp), allocatable :: velocity(:, :)           !< (3, n) m/s, U of each body at the imposition's time
+    real(wp), allocatable :: angular_velocity(:, :)   !< (3, n) rad/s, Omega
+    real(wp), allocatable :: momentum_change(:, :)    !< (3, n) kg m/s added to the fluid this step
+    real(wp), allocatable :: angular_change(:, :)     !< (3, n) kg m^2/s added to the fluid this step
+    !> (6, n) momentum (1:3) and angular momentum (4:6) change of the fictitious fluid on each body's
+    !> nodes over the step: this rank's part during the step, the global sum after ibm_step_loads
+    real(wp), allocatable :: inertia_change(:, :)
+    integer :: halo_planes = 0           !< planes beyond the slab that the stencils reach (every component)
+    logical :: remote_ghosts = .false.   !< some stencil (on some rank) holds a ghost node of another rank
+    real(wp), allocatable :: below(:, :, :, :), above(:, :, :, :)   !< copies of the neighbours' planes, per component
+    type(lever_arms_t) :: arms(3)        !< per component, for the current placement
+    real(wp), allocatable :: arm_centres(:, :)   !< (3, n) the centres the lever arms were computed for
+  end type immersed_boundary_t
+
+contains
+
+  !> Place the bodies with their velocities (at the time level of the next imposition) and, when
+  !> classify is true, classify the nodes again (collective). The first call always classifies.
+  subroutine ibm_set_bodies(ibm, grid, bodies, velocity, angular_velocity, classify)
+    type(immersed_boundary_t), intent(inout) :: ibm
+    type(fluid_grid_t), intent(in) :: grid
+    type(immersed_body_t), intent(in) :: bodies(:)
+    real(wp), intent(in) :: velocity(:, :), angular_velocity(:, :)
+    logical, intent(in) :: classify
+    type(immersed_options_t) :: options
+    integer :: n, c, planes
+    logical :: remote
+    character(len=200) :: text
+
+    n = size(bodies)
+    if (.not. allocated(ibm%bodies)) then
+      allocate(ibm%velocity(3, n), ibm%angular_velocity(3, n), ibm%momentum_change(3, n), ibm%angular_change(3, n))
+      allocate(ibm%inertia_change(6, n))
+      ibm%momentum_change = 0; ibm%angular_change = 0; ibm%inertia_change = 0
+    end if
+    ibm%bodies = bodies
+    ibm%velocity = velocity
+    ibm%angular_velocity = angular_velocity
+    if (.not. classify .and. allocated(ibm%arm_centres)) then
+      ! Unchanged centres (a fixed or only spinning sphere): the lever arms stand.
+      if (any(ibm%arm_centres(1, :) /= ibm%bodies(:)%centre(1)) .or. &
+          any(ibm%arm_centres(2, :) /= ibm%bodies(:)%centre(2)) &
+          .or. any(ibm%arm_centres(3, :) /= ibm%bodies(:)%centre(3))) call compute_lever_arms(ibm, grid)
+      return
+    end if
+
+    select case (trim(ibm%settings%coupling))
+    case ('implicit')
+      options%image_point = 'mirror'
+    case ('explicit')
+      options%image_point = 'image'
+    case default
+      call fatal('immersed boundary: coupling = '''//trim(ibm%settings%coupling)//'''; allowed: implicit, explicit')
+    end select
+    call classify_nodes(grid, bodies, options, ibm%geometry)
+    planes = 0
+    remote = .false.
+    do c = 1, 3
+      planes = max(planes, ibm%geometry%component(c)%halo_planes_needed)
+      remote = remote .or. any_remote_ghost(ibm%geometry%component(c))
+    end do
+    call MPI_Allreduce(MPI_IN_PLACE, planes, 1, MPI_INTEGER, MPI_MAX, world)
+    call MPI_Allreduce(MPI_IN_PLACE, remote, 1, MPI_LOGICAL, MPI_LOR, world)
+    planes = max(planes, 1)
+    if (planes > grid%nz_local) then
+      write(text, '(a,i0,a,i0,a)') 'immersed boundary: the ghost stencils reach ', planes, &
+          ' planes beyond a rank''s slab of ', grid%nz_local, ' planes; use fewer ranks or more cells in z'
+      call fatal(trim(text))
+    end if
+    ibm%remote_ghosts = remote
+    if (planes /= ibm%halo_planes) then
+      ibm%halo_planes = planes
+      if (allocated(ibm%below)) deallocate(ibm%below, ibm%above)
+      allocate(ibm%below(0:grid%nx + 1, 0:grid%ny + 1, 1 - planes:0, 3))
+      allocate(ibm%above(0:grid%nx + 1, 0:grid%ny + 1, grid%nz_local + 1:grid%nz_local + planes, 3))
+    end if
+    call compute_lever_arms(ibm, grid)
+  end subroutine ibm_set_bodies
+
+  subroutine compute_lever_arms(ibm, grid)
+    type(immersed_boundary_t), intent(inout) :: ibm
+    type(fluid_grid_t), intent(in) :: grid
+    real(wp) :: box(3)
+    integer :: c, m
+    box = [grid%lx, grid%ly, grid%lz]
+    if (allocated(ibm%arm_centres)) deallocate(ibm%arm_centres)
+    allocate(ibm%arm_centres(3, size(ibm%bodies)))
+    do m = 1, size(ibm%bodies)
+      ibm%arm_centres(:, m) = ibm%bodies(m)%centre
+    end do
+    do c = 1, 3
+      associate (nodes => ibm%geometry%component(c), arms => ibm%arms(c))
+        if (allocated(arms%interior)) deallocate(arms%interior, arms%ghost, arms%surface)
+        allocate(arms%interior(3, nodes%n_interior), arms%ghost(3, nodes%n_ghost), arms%surface(3, nodes%n_ghost))
+        do m = 1, nodes%n_interior
+          arms%interior(:, m) = minimum_image(node_position(grid, c, nodes%interior(1, m), nodes%interior(2, m), &
+                                                            nodes%interior(3, m)) - ibm%bodies(nodes%interior_body(m))%centre, box)
+        end do
+        do m = 1, nodes%n_ghost
+          arms%ghost(:, m) = minimum_image(nodes%ghost(m)%position - ibm%bodies(nodes%ghost(m)%body)%centre, box)
+          arms%surface(:, m) = minimum_image(nodes%ghost(m)%surface_point - ibm%bodies(nodes%ghost(m)%body)%centre, box)
+        end do
+      end associate
+    end do
+  end subroutine compute_lever_arms
+
+  !> Start a step's load bookkeeping (call after ibm_set_bodies has placed the bodies at t^{n+1},
+  !> with u^n in u, v, w): the impositions of the step add to zeroed momentum changes, and the
+  !> fictitious fluid's change starts from minus the momentum of u^n on the bodies' new nodes.
+  subroutine ibm_begin_step(ibm, grid, u, v, w)
+    type(immersed_boundary_t), intent(inout) :: ibm
+    type(fluid_grid_t), intent(in) :: grid
+    real(wp), intent(in) :: u(0:, 0:, 0:), v(0:, 0:, 0:), w(0:, 0:, 0:)
+    ibm%momentum_change = 0
+    ibm%angular_change = 0
+    ibm%inertia_change = 0
+    call add_body_momentum(ibm, grid, u, v, w, -1.0_wp)
+  end subroutine ibm_begin_step
+
+  !> Force (N) and torque (N m, about each centre) on every body over the step of length dt (call
+  !> after the step's impositions, with u^{n+1} in u, v, w; collective): minus the momentum the
+  !> impositions added per unit time, plus the rate of change of the fictitious fluid's momentum
+  !> on the body's nodes (summed over the ranks).
+  subroutine ibm_step_loads(ibm, grid, u, v, w, dt, force, torque)
+    type(immersed_boundary_t), intent(inout) :: ibm
+    type(fluid_grid_t), intent(in) :: grid
+    real(wp), intent(in) :: u(0:, 0:, 0:), v(0:, 0:, 0:), w(0:, 0:, 0:)
+    real(wp), intent(in) :: dt
+    real(wp), intent(out) :: force(:, :), torque(:, :)
+    real(wp), allocatable :: total(:, :)
+    integer :: n
+    call add_body_momentum(ibm, grid, u, v, w, 1.0_wp)
+    n = size(ibm%bodies)
+    allocate(total(12, n))
+    total(1:3, :) = ibm%momentum_change
+    total(4:6, :) = ibm%angular_change
+    total(7:12, :) = ibm%inertia_change
+    call MPI_Allreduce(MPI_IN_PLACE, total, 12 * n, mpi_wp, MPI_SUM, world)
+    ibm%inertia_change = total(7:12, :)
+    force = (-total(1:3, :) + total(7:9, :)) / dt
+    torque = (-total(4:6, :) + total(10:12, :)) / dt
+  end subroutine ibm_step_loads
+
+  !> inertia_change += sign rho dV sum (u e_c and r x u e_c) over every body's ghost and interior nodes.
+  subroutine add_body_momentum(ibm, grid, u, v, w, sign)
+    type(immersed_boundary_t), intent(inout) :: ibm
+    type(fluid_grid_t), intent(in) :: grid
+    real(wp), intent(in) :: u(0:, 0:, 0:), v(0:, 0:, 0:), w(0:, 0:, 0:)
+    real(wp), intent(in) :: sign
+    call add_component(1, u)
+    call add_component(2, v)
+    call add_component(3, w)
+  contains
+    subroutine add_component(c, field)
+      integer, intent(in) :: c
+      real(wp), intent(in) :: field(0:, 0:, 0:)
+      real(wp) :: added(3), factor
+      integer :: m, n
+      factor = sign * ibm%settings%fluid_density * grid%cell_volume
+      associate (nodes => ibm%geometry%component(c), arms => ibm%arms(c))
+        do m = 1, nodes%n_interior
+          n = nodes%interior_body(m)
+          added = 0
+          added(c) = factor * field(nodes%interior(1, m), nodes%interior(2, m), nodes%interior(3, m))
+          ibm%inertia_change(1:3, n) = ibm%inertia_change(1:3, n) + added
+          ibm%inertia_change(4:6, n) = ibm%inertia_change(4:6, n) + cross(arms%interior(:, m), added)
+        end do
+        do m = 1, nodes%n_ghost
+          n = nodes%ghost(m)%body
+          added = 0
+          added(c) = factor * field(nodes%ghost(m)%node(1), nodes%ghost(m)%node(2), nodes%ghost(m)%node(3))
+          ibm%inertia_change(1:3, n) = ibm%inertia_change(1:3, n) + added
+          ibm%inertia_change(4:6, n) = ibm%inertia_change(4:6, n) + cross(arms%ghost(:, m), added)
+        end do
+      end associate
+    end subroutine add_component
+  end subroutine add_body_momentum
+
+  !> Impose the interior and ghost values on u, v, w (collective) and refresh their halos; the
+  !> momentum the imposition adds goes into the step's load bookkeeping. Stops the run when the
+  !> implicit ghost rows do not converge in max_sweeps sweeps.
+  subroutine ibm_impose(ibm, grid, u, v, w, report)
+    type(immersed_boundary_t), intent(inout) :: ibm
+    type(fluid_grid_t), intent(inout) :: grid
+    real(wp), intent(inout) :: u(0:, 0:, 0:), v(0:, 0:, 0:), w(0:, 0:, 0:)
+    type(imposition_report_t), intent(out) :: report
+    real(wp) :: change(3), scale(3), limit
+    real(wp), allocatable :: before(:, :)   ! (max ghosts, 3) ghost values before the imposition
+    real(wp), allocatable :: surface(:, :)  ! u_B of each ghost
+    integer :: c, sweep, max_sweeps, n_max
+    character(len=240) :: text
+
+    n_max = max(1, maxval([(ibm%geometry%component(c)%n_ghost, c = 1, 3)]))
+    allocate(before(n_max, 3), surface(n_max, 3))
+    change = 0
+    scale = 0
+    call impose_interior(ibm, grid, 1, u, change(1), scale(1))
+    call impose_interior(ibm, grid, 2, v, change(2), scale(2))
+    call impose_interior(ibm, grid, 3, w, change(3), scale(3))
+    call surface_velocities(ibm, grid, 1, u, surface(:, 1), before(:, 1), scale(1))
+    call surface_velocities(ibm, grid, 2, v, surface(:, 2), before(:, 2), scale(2))
+    call surface_velocities(ibm, grid, 3, w, surface(:, 3), before(:, 3), scale(3))
+    report%velocity_scale = max(global_max(maxval(scale)), tiny(1.0_wp))
+
+    max_sweeps = 1
+    if (ibm%settings%coupling == 'implicit') max_sweeps = ibm%settings%max_sweeps
+    report%residual = huge(1.0_wp)
+    do sweep = 1, max_sweeps
+      if (sweep == 1 .or. ibm%remote_ghosts) then
+        call exchange_planes(ibm, grid, u, v, w)
+        report%exchanges = report%exchanges + 1
+      end if
+      limit = 0
+      call jacobi_sweep(ibm, 1, u, surface(:, 1), limit)
+      call jacobi_sweep(ibm, 2, v, surface(:, 2), limit)
+      call jacobi_sweep(ibm, 3, w, surface(:, 3), limit)
+      report%sweeps = sweep
+      report%residual = global_max(limit) / report%velocity_scale
+      if (report%residual <= ibm%settings%tolerance) exit
+    end do
+    if (ibm%settings%coupling == 'implicit' .and. .not. (report%residual <= ibm%settings%tolerance)) then
+      write(text, '(a,i0,a,es10.3,a,es10.3,a)') 'immersed boundary: the ghost rows did not converge in ', &
+          max_sweeps, ' sweeps (residual ', report%residual, ' > tolerance ', ibm%settings%tolerance, &
+          '); raise &bodies max_sweeps, loosen ghost_tolerance, or check that no body is thinner than 4 cells'
+      call fatal(trim(text))
+    end if
+
+    call account_ghosts(ibm, grid, 1, u, before(:, 1), change(1))
+    call account_ghosts(ibm, grid, 2, v, before(:, 2), change(2))
+    call account_ghosts(ibm, grid, 3, w, before(:, 3), change(3))
+    report%largest_change = global_max(maxval(change)) / report%velocity_scale
+    call exchange_slab_halos(grid%slab, u, v, w)
+  end subroutine ibm_impose
+
+  !> Rigid-body velocity component `component` of body n at lever arm r: (U + Omega x r)_c (m/s).
+  pure real(wp) function rigid_velocity(ibm, n, component, r) result(value)
+    type(immersed_boundary_t), intent(in) :: ibm
+    integer, intent(in) :: n, component
+    real(wp), intent(in) :: r(3)
+    associate (omega => ibm%angular_velocity(:, n))
+      select case (component)
+      case (1)
+        value = ibm%velocity(1, n) + omega(2) * r(3) - omega(3) * r(2)
+      case (2)
+        value = ibm%velocity(2, n) + omega(3) * r(1) - omega(1) * r(3)
+      case default
+        value = ibm%velocity(3, n) + omega(1) * r(2) - omega(2) * r(1)
+      end select
+    end associate
+  end function rigid_velocity
+
+  !> Largest |div u| (1/s) over this rank's cells and over all ranks (collective): after the
+  !> re-imposition it is non-zero only in the cut cells, whose faces carry fictitious ghost values.
+  function cell_divergence_max(grid, u, v, w) result(largest)
+    type(fluid_grid_t), intent(in) :: grid
+    real(wp), intent(in) :: u(0:, 0:, 0:), v(0:, 0:, 0:), w(0:, 0:, 0:)
+    real(wp) :: largest
+    integer :: i, j, k
+    largest = 0
+    do k = 1, grid%nz_local
+      do j = 1, grid%ny
+        do i = 1, grid%nx
+          largest = max(largest, abs((u(i, j, k) - u(i - 1, j, k)) / grid%dx + (v(i, j, k) - v(i, j - 1, k)) / grid%dy &
+                                     + (w(i, j, k) - w(i, j, k - 1)) / grid%dz))
+        end do
+      end do
+    end do
+    largest = global_max(largest)
+  end function cell_divergence_max
+
+  ! ---------------------------------------------------------------------------------------------
+
+  subroutine impose_interior(ibm, grid, component, field, change, scale)
+    type(immersed_boundary_t), intent(inout) :: ibm
+    type(fluid_grid_t), intent(in) :: grid
+    integer, intent(in) :: component
+    real(wp), intent(inout) :: field(0:, 0:, 0:)
+    real(wp), intent(inout) :: change, scale
+    integer :: m, n, node(3)
+    real(wp) :: value, delta
+    associate (nodes => ibm%geometry%component(component))
+      do m = 1, nodes%n_interior
+        node = nodes%interior(:, m)
+        n = nodes%interior_body(m)
+        value = rigid_velocity(ibm, n, component, ibm%arms(component)%interior(:, m))
+        delta = value - field(node(1), node(2), node(3))
+        field(node(1), node(2), node(3)) = value
+        call account(ibm, grid, n, component, ibm%arms(component)%interior(:, m), delta)
+        change = max(change, abs(delta))
+        scale = max(scale, abs(value))
+      end do
+    end associate
+  end subroutine impose_interior
+
+  !> u_B of every ghost of one component, the ghost values before the imposition, and the scale.
+  subroutine surface_velocities(ibm, grid, component, field, surface, before, scale)
+    type(immersed_boundary_t), intent(in) :: ibm
+    type(fluid_grid_t), intent(in) :: grid
+    integer, intent(in) :: component
+    real(wp), intent(in) :: field(0:, 0:, 0:)
+    real(wp), intent(out) :: surface(:), before(:)
+    real(wp), intent(inout) :: scale
+    integer :: g
+    associate (nodes => ibm%geometry%component(component))
+      do g = 1, nodes%n_ghost
+        associate (ghost => nodes%ghost(g))
+          surface(g) = rigid_velocity(ibm, ghost%body, component, ibm%arms(component)%surface(:, g))
+          before(g) = field(ghost%node(1), ghost%node(2), ghost%node(3))
+          scale = max(scale, abs(surface(g)), abs(before(g)))
+        end associate
+      end do
+    end associate
+  end subroutine surface_velocities
+
+  !> One Jacobi sweep of the ghost rows of one component: every new value from the values before
+  !> the sweep; `limit` takes the largest change.
+  subroutine jacobi_sweep(ibm, component, field, surface, limit)
+    type(immersed_boundary_t), intent(in) :: ibm
+    integer, intent(in) :: component
+    real(wp), intent(inout) :: field(0:, 0:, 0:)
+    real(wp), intent(in) :: surface(:)
+    real(wp), intent(inout) :: limit
+    real(wp), allocatable :: updated(:)
+    real(wp) :: kappa, self_weight, neighbours
+    integer :: g, corner, k
+    associate (nodes => ibm%geometry%component(component))
+      allocate(updated(nodes%n_ghost))
+      do g = 1, nodes%n_ghost
+        associate (ghost => nodes%ghost(g))
+          kappa = ghost%extrapolation
+          neighbours = 0
+          self_weight = 0
+          do corner = 1, 8
+            if (corner == ghost%self_corner) then
+              self_weight = ghost%weight(corner)
+              cycle
+            end if
+            ! The corner's local plane, continued beyond the slab (lower corner + bit).
+            k = ghost%node(3) + ghost%lower_offset(3) + (corner - 1) / 4
+            neighbours = neighbours + ghost%weight(corner) * &
+                         plane_value(ibm, component, field, ghost%stencil(1, corner), ghost%stencil(2, corner), k)
+          end do
+          updated(g) = ((1.0_wp + kappa) * surface(g) - kappa * neighbours) / (1.0_wp + kappa * self_weight)
+        end associate
+      end do
+      do g = 1, nodes%n_ghost
+        associate (node => nodes%ghost(g)%node)
+          limit = max(limit, abs(updated(g) - field(node(1), node(2), node(3))))
+          field(node(1), node(2), node(3)) = updated(g)
+        end associate
+      end do
+    end associate
+  end subroutine jacobi_sweep
+
+  !> Value at i, j (global) and local plane k, which may lie beyond the slab (copied planes).
+  pure real(wp) function plane_value(ibm, component, field, i, j, k) result(value)
+    type(immersed_boundary_t), intent(in) :: ibm
+    integer, intent(in) :: component
+    real(wp), intent(in) :: field(0:, 0:, 0:)
+    integer, intent(in) :: i, j, k
+    if (k < 1) then
+      value = ibm%below(i, j, k, component)
+    else if (k > ubound(field, 3) - 1) then
+      value = ibm%above(i, j, k, component)
+    else
+      value = field(i, j, k)
+    end if
+  end function plane_value
+
+  !> Add the final ghost changes of one component to the load bookkeeping.
+  subroutine account_ghosts(ibm, grid, component, field, before, change)
+    type(immersed_boundary_t), intent(inout) :: ibm
+    type(fluid_grid_t), intent(in) :: grid
+    integer, intent(in) :: component
+    real(wp), intent(in) :: field(0:, 0:, 0:)
+    real(wp), intent(in) :: before(:)
+    real(wp), intent(inout) :: change
+    integer :: g
+    real(wp) :: delta
+    do g = 1, ibm%geometry%component(component)%n_ghost
+      associate (ghost => ibm%geometry%component(component)%ghost(g))
+        delta = field(ghost%node(1), ghost%node(2), ghost%node(3)) - before(g)
+        call account(ibm, grid, ghost%body, component, ibm%arms(component)%ghost(:, g), delta)
+        change = max(change, abs(delta))
+      end associate
+    end do
+  end subroutine account_ghosts
+
+  !> Momentum rho dV delta e_c and angular momentum rho dV r x (delta e_c) added at the node of
+  !> lever arm r.
+  subroutine account(ibm, grid, n, component, r, delta)
+    type(immersed_boundary_t), intent(inout) :: ibm
+    type(fluid_grid_t), intent(in) :: grid
+    integer, intent(in) :: n, component
+    real(wp), intent(in) :: r(3), delta
+    real(wp) :: added(3)
+    added = 0
+    added(component) = ibm%settings%fluid_density * grid%cell_volume * delta
+    ibm%momentum_change(:, n) = ibm%momentum_change(:, n) + added
+    ibm%angular_change(:, n) = ibm%angular_change(:, n) + cross(r, added)
+  end subroutine account
+
+  !> Copy the planes the stencils reach beyond the slab from the neighbouring ranks (periodic;
+  !> with one rank the slab's own planes), for all three components.
+  subroutine exchange_planes(ibm, grid, u, v, w)
+    type(immersed_boundary_t), intent(inout) :: ibm
+    type(fluid_grid_t), intent(in) :: grid
+    real(wp), intent(in) :: u(0:, 0:, 0:), v(0:, 0:, 0:), w(0:, 0:, 0:)
+    call exchange_component(u, 1)
+    call exchange_component(v, 2)
+    call exchange_component(w, 3)
+  contains
+    subroutine exchange_component(field, component)
+      real(wp), intent(in) :: field(0:, 0:, 0:)
+      integer, intent(in) :: component
+      integer :: h, count, nzl
+      h = ibm%halo_planes
+      nzl = grid%nz_local
+      count = size(field, 1) * size(field, 2) * h
+      call MPI_Sendrecv(field(:, :, 1:h), count, mpi_wp, grid%slab%rank_below, 410 + component, &
+                        ibm%above(:, :, :, component), count, mpi_wp, grid%slab%rank_above, 410 + component, world, &
+                        MPI_STATUS_IGNORE)
+      call MPI_Sendrecv(field(:, :, nzl - h + 1:nzl), count, mpi_wp, grid%slab%rank_above, 420 + component, &
+                        ibm%below(:, :, :, component), count, mpi_wp, grid%slab%rank_below, 420 + component, world, &
+                        MPI_STATUS_IGNORE)
+    end subroutine exchange_component
+  end subroutine exchange_planes
+
+  pure logical function any_remote_ghost(nodes)
+    type(component_nodes_t), intent(in) :: nodes
+    integer :: g
+    any_remote_ghost = .false.
+    do g = 1, nodes%n_ghost
+      if (any(.not. nodes%ghost(g)%stencil_local .and. nodes%ghost(g)%stencil_status == node_ghost)) then
+        any_remote_ghost = .true.
+        return
+      end if
+    end do
+  end function any_remote_ghost
+
+  pure function cross(a, b) result(c)
+    real(wp), intent(in) :: a(3), b(3)
+    real(wp) :: c(3)
+    c = [a(2) * b(3) - a(3) * b(2), a(3) * b(1) - a(1) * b(3), a(1) * b(2) - a(2) * b(1)]
+  end function cross
+end module immersed_boundary

@@ -1,0 +1,241 @@
+!> The resolved scene with immersed bodies in prescribed motion: the staged fluid step with the
+!> immersed boundary (docs/design.md, the step's stages; ibm-notes section 8.1.5),
+!>   bodies at t^{n+1} (reclassified when they move) -> fluid_predict (u*, with the uniform drive)
+!>   -> impose on u* -> fluid_project -> re-impose on u^{n+1} -> fluid_finish_step -> loads,
+!> and the per-step time series of every body's force and torque (bodies_loads.dat, docs/outputs.md).
+!>
+!> Prescribed motion of body n (lab frame): centre c(t) = c0 + U t + A sin(2 pi f t), velocity
+!> U + 2 pi f A cos(2 pi f t), constant angular velocity Omega, orientation q(t) = rot(Omega t) q0.
+module immersed_scene
+  use agglo_kinds, only: wp, i8
+  use physical_constants, only: two_pi
+  use error_handling, only: fatal
+  use parallel_env, only: is_root
+  use logger, only: log_line
+  use text_format, only: real_text, int_text
+  use timer_registry, only: timer_register, timer_tic, timer_toc
+  use fluid_grid, only: fluid_grid_t, allocate_field
+  use fluid_solver, only: fluid_solver_t, fluid_predict, fluid_project, fluid_finish_step
+  use quaternion, only: quaternion_from_axis_angle, quaternion_product, quaternion_normalise
+  use spheroid, only: spheroid_t, make_spheroid
+  use config_bodies, only: bodies_config_t
+  use immersed_geometry, only: immersed_body_t, thin_dimension_cells
+  use immersed_boundary, only: immersed_boundary_t, ibm_settings_t, imposition_report_t, ibm_set_bodies, &
+                               ibm_impose, ibm_begin_step, ibm_step_loads, cell_divergence_max
+  implicit none
+  private
+  public :: prescribed_motion_t, immersed_scene_t, immersed_scene_create, immersed_step, motion_body, &
+            motion_velocity, loads_open, loads_write, loads_close, motions_from_config
+
+  !> One body's shape and prescribed rigid motion.
+  type :: prescribed_motion_t
+    type(spheroid_t) :: shape
+    real(wp) :: centre(3) = 0                  !< m, c0 at t = 0
+    real(wp) :: orientation(4) = [1.0_wp, 0.0_wp, 0.0_wp, 0.0_wp]   !< q0, body -> lab
+    real(wp) :: velocity(3) = 0                !< m/s, U
+    real(wp) :: angular_velocity(3) = 0        !< rad/s, Omega (lab frame, constant)
+    real(wp) :: amplitude(3) = 0               !< m, A of the oscillation
+    real(wp) :: frequency = 0                  !< Hz, f of the oscillation
+  end type prescribed_motion_t
+
+  type :: immersed_scene_t
+    type(immersed_boundary_t) :: ibm
+    type(prescribed_motion_t), allocatable :: motion(:)
+    real(wp) :: driving_force(3) = 0           !< N/m^3, uniform body force on the whole box (mean pressure gradient)
+    real(wp), allocatable :: force_u(:, :, :), force_v(:, :, :), force_w(:, :, :)   !< m/s^2, f / rho
+    logical :: moving = .false.                !< some body changes its position or orientation
+    real(wp), allocatable :: force(:, :), torque(:, :)   !< (3, n) N and N m of the last step
+    type(imposition_report_t) :: predicted, projected    !< the two impositions of the last step
+    real(wp) :: divergence = 0                 !< 1/s, largest |div u| after the re-imposition (cut cells)
+    integer :: timer = 0
+    integer :: loads_unit = 0
+    logical :: loads_opened = .false.              !< this rank writes bodies_loads.dat
+  end type immersed_scene_t
+
+contains
+
+  !> Place the bodies at t = solver%time and classify the nodes (collective).
+  subroutine immersed_scene_create(scene, solver, motion, settings, driving_force)
+    type(immersed_scene_t), intent(inout) :: scene
+    type(fluid_solver_t), intent(inout) :: solver
+    type(prescribed_motion_t), intent(in) :: motion(:)
+    type(ibm_settings_t), intent(in) :: settings
+    real(wp), intent(in) :: driving_force(3)
+    integer :: n
+    scene%motion = motion
+    scene%ibm%settings = settings
+    scene%driving_force = driving_force
+    call allocate_field(solver%grid, scene%force_u)
+    call allocate_field(solver%grid, scene%force_v)
+    call allocate_field(solver%grid, scene%force_w)
+    scene%force_u = driving_force(1) / solver%density
+    scene%force_v = driving_force(2) / solver%density
+    scene%force_w = driving_force(3) / solver%density
+    scene%moving = .false.
+    do n = 1, size(motion)
+      scene%moving = scene%moving .or. any(motion(n)%velocity /= 0.0_wp) .or. &
+                     (any(motion(n)%amplitude /= 0.0_wp) .and. motion(n)%frequency /= 0.0_wp) .or. &
+                     (any(motion(n)%angular_velocity /= 0.0_wp) .and. motion(n)%shape%a /= motion(n)%shape%b)
+    end do
+    allocate(scene%force(3, size(motion)), scene%torque(3, size(motion)))
+    scene%force = 0
+    scene%torque = 0
+    call place_bodies(scene, solver, solver%time, classify=.true.)
+    scene%timer = timer_register('immersed boundary')
+  end subroutine immersed_scene_create
+
+  !> One fluid step of length dt with the immersed bodies (collective).
+  subroutine immersed_step(scene, solver, dt)
+    type(immersed_scene_t), intent(inout) :: scene
+    type(fluid_solver_t), intent(inout) :: solver
+    real(wp), intent(in) :: dt
+    call timer_tic(scene%timer)
+    call place_bodies(scene, solver, solver%time + dt, classify=scene%moving)
+    call ibm_begin_step(scene%ibm, solver%grid, solver%u, solver%v, solver%w)
+    call timer_toc(scene%timer)
+    call fluid_predict(solver, dt, force_u=scene%force_u, force_v=scene%force_v, force_w=scene%force_w)
+    call timer_tic(scene%timer)
+    call ibm_impose(scene%ibm, solver%grid, solver%explicit_old_u, solver%explicit_old_v, solver%explicit_old_w, &
+                    scene%predicted)
+    call timer_toc(scene%timer)
+    call fluid_project(solver)
+    call timer_tic(scene%timer)
+    call ibm_impose(scene%ibm, solver%grid, solver%u, solver%v, solver%w, scene%projected)
+    scene%divergence = cell_divergence_max(solver%grid, solver%u, solver%v, solver%w)
+    call ibm_step_loads(scene%ibm, solver%grid, solver%u, solver%v, solver%w, dt, scene%force, scene%torque)
+    call timer_toc(scene%timer)
+    call fluid_finish_step(solver)
+  end subroutine immersed_step
+
+  subroutine place_bodies(scene, solver, time, classify)
+    type(immersed_scene_t), intent(inout) :: scene
+    type(fluid_solver_t), intent(in) :: solver
+    real(wp), intent(in) :: time
+    logical, intent(in) :: classify
+    type(immersed_body_t), allocatable :: bodies(:)
+    real(wp), allocatable :: velocity(:, :), angular_velocity(:, :)
+    integer :: n
+    allocate(bodies(size(scene%motion)), velocity(3, size(scene%motion)), angular_velocity(3, size(scene%motion)))
+    do n = 1, size(scene%motion)
+      bodies(n) = motion_body(scene%motion(n), time, [solver%grid%lx, solver%grid%ly, solver%grid%lz])
+      velocity(:, n) = motion_velocity(scene%motion(n), time)
+      angular_velocity(:, n) = scene%motion(n)%angular_velocity
+    end do
+    call ibm_set_bodies(scene%ibm, solver%grid, bodies, velocity, angular_velocity, classify)
+  end subroutine place_bodies
+
+  !> The bodies of the deck's &bodies group (the density is the fluid's: prescribed motion needs
+  !> none). A body thinner than 4 cells of the grid is refused with the grid it needs: the ghost
+  !> layers of its opposite faces would overlap (ibm-notes section 0).
+  function motions_from_config(cfg, grid) result(motion)
+    type(bodies_config_t), intent(in) :: cfg
+    type(fluid_grid_t), intent(in) :: grid
+    type(prescribed_motion_t), allocatable :: motion(:)
+    real(wp), parameter :: thinnest_cells = 4.0_wp
+    real(wp) :: cells, axis(3), ex(3), thin
+    integer :: n, needed
+    character(len=320) :: text
+    allocate(motion(cfg%count))
+    ex = [1.0_wp, 0.0_wp, 0.0_wp]
+    do n = 1, cfg%count
+      if (trim(cfg%shape(n)) == 'sphere') then
+        motion(n)%shape = make_spheroid('sphere', cfg%radius(n), 1.0_wp)
+      else
+        motion(n)%shape = make_spheroid(trim(cfg%shape(n)), cfg%radius(n), 1.0_wp, cfg%aspect_ratio(n))
+      end if
+      cells = thin_dimension_cells(motion(n)%shape, grid)
+      if (cells < thinnest_cells) then
+        thin = 2.0_wp * min(motion(n)%shape%a, motion(n)%shape%b)
+        needed = ceiling(thinnest_cells * max(grid%lx, grid%ly, grid%lz) / thin)
+        write(text, '(a,i0,a,a,a,f5.2,a,i0,a,i0,a)') 'deck: &bodies body ', n, ' (', trim(cfg%shape(n)), &
+            ') is ', cells, ' cells thin on this grid; the immersed boundary needs at least 4: use &grid nx = ny = nz >= ', &
+            needed, ' (', needed, '^3 for this box) or a larger radius'
+        call fatal(trim(text))
+      end if
+      motion(n)%centre = cfg%centre(:, n)
+      axis = cfg%axis(:, n)
+      if (norm2(axis) > 0.0_wp) then
+        axis = axis / norm2(axis)
+        if (norm2(cross3(ex, axis)) > 1.0e-12_wp) then
+          motion(n)%orientation = quaternion_from_axis_angle(cross3(ex, axis), acos(max(-1.0_wp, min(1.0_wp, axis(1)))))
+        else if (axis(1) < 0.0_wp) then
+          motion(n)%orientation = quaternion_from_axis_angle([0.0_wp, 0.0_wp, 1.0_wp], acos(-1.0_wp))
+        end if
+      end if
+      motion(n)%velocity = cfg%velocity(:, n)
+      motion(n)%angular_velocity = cfg%angular_velocity(:, n)
+      motion(n)%amplitude = cfg%oscillation_amplitude(:, n)
+      motion(n)%frequency = cfg%oscillation_frequency(n)
+    end do
+  contains
+    pure function cross3(a, b) result(c)
+      real(wp), intent(in) :: a(3), b(3)
+      real(wp) :: c(3)
+      c = [a(2) * b(3) - a(3) * b(2), a(3) * b(1) - a(1) * b(3), a(1) * b(2) - a(2) * b(1)]
+    end function cross3
+  end function motions_from_config
+
+  !> The body at time t, its centre wrapped into the box.
+  pure function motion_body(motion, time, box) result(body)
+    type(prescribed_motion_t), intent(in) :: motion
+    real(wp), intent(in) :: time, box(3)
+    type(immersed_body_t) :: body
+    body%shape = motion%shape
+    body%centre = modulo(motion%centre + motion%velocity * time + motion%amplitude * sin(two_pi * motion%frequency * time), &
+                         box)
+    body%orientation = quaternion_normalise(quaternion_product( &
+        quaternion_from_axis_angle(motion%angular_velocity, norm2(motion%angular_velocity) * time), motion%orientation))
+  end function motion_body
+
+  pure function motion_velocity(motion, time) result(velocity)
+    type(prescribed_motion_t), intent(in) :: motion
+    real(wp), intent(in) :: time
+    real(wp) :: velocity(3)
+    velocity = motion%velocity + two_pi * motion%frequency * motion%amplitude * cos(two_pi * motion%frequency * time)
+  end function motion_velocity
+
+  !> Open the loads time series (root; a new file with its header, or appended on restart).
+  subroutine loads_open(scene, path, append)
+    type(immersed_scene_t), intent(inout) :: scene
+    character(len=*), intent(in) :: path
+    logical, intent(in) :: append
+    integer :: ios
+    character(len=256) :: message
+    if (.not. is_root()) return
+    if (append) then
+      open(newunit=scene%loads_unit, file=path, status='unknown', position='append', action='write', iostat=ios, &
+           iomsg=message)
+    else
+      open(newunit=scene%loads_unit, file=path, status='replace', action='write', iostat=ios, iomsg=message)
+    end if
+    if (ios /= 0) call fatal('immersed scene: cannot open '//path//': '//trim(message))
+    scene%loads_opened = .true.
+    if (.not. append) write(scene%loads_unit, '(a)') '# step time_s body force_x_N force_y_N force_z_N ' // &
+        'torque_x_Nm torque_y_Nm torque_z_Nm sweeps residual slip divergence_per_s'
+  end subroutine loads_open
+
+  !> One row per body for the step just taken (root).
+  subroutine loads_write(scene, step, time)
+    type(immersed_scene_t), intent(in) :: scene
+    integer(i8), intent(in) :: step
+    real(wp), intent(in) :: time
+    integer :: n
+    if (.not. scene%loads_opened) return
+    do n = 1, size(scene%motion)
+      write(scene%loads_unit, '(i0,1x,es23.16,1x,i0,6(1x,es23.16),1x,i0,3(1x,es10.3))') step, time, n, &
+          scene%force(:, n), scene%torque(:, n), scene%predicted%sweeps, scene%predicted%residual, &
+          scene%projected%largest_change, scene%divergence
+    end do
+    flush(scene%loads_unit)
+  end subroutine loads_write
+
+  subroutine loads_close(scene)
+    type(immersed_scene_t), intent(inout) :: scene
+    if (scene%loads_opened) close(scene%loads_unit)
+    scene%loads_opened = .false.
+    call log_line('immersed scene: last step sweeps '//int_text(scene%predicted%sweeps)//' (plane exchanges '// &
+                  int_text(scene%predicted%exchanges)//')'// &
+                  ', residual '//real_text(scene%predicted%residual)//', slip '// &
+                  real_text(scene%projected%largest_change)//', cut-cell divergence '//real_text(scene%divergence)//' 1/s')
+  end subroutine loads_close
+end module immersed_scene

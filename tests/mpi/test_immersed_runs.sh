@@ -1,0 +1,80 @@
+#!/usr/bin/env bash
+# End-to-end runs of the resolved scene with bodies in prescribed motion (&scene particles =
+# 'prescribed', &bodies; docs/decks.md, docs/outputs.md bodies_loads.dat):
+#  - a translating sphere and a rotating needle in a driven box, 1 rank and 2 ranks (a body crosses
+#    the rank boundary and the periodic wrap): every load in bodies_loads.dat equal to 1e-10 of the
+#    largest load (round-off; the Jacobi ghost sweeps do not depend on the ranks), for both couplings;
+#  - the file has one row per body per step and the log names the sweeps and the residual;
+#  - refused decks, before any step, with a message naming the variable: Crank-Nicolson diffusion
+#    with bodies, load_method = 'surface', a disk thinner than 4 cells (the message gives the grid).
+# Prints PASS/FAIL lines; works in a temporary directory.
+set -u
+AGGLO=${AGGLO:?AGGLO must be the agglo executable}
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
+work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
+cd "$work"
+
+deck() { # name, coupling, viscous_scheme, load_method, shape2, cells
+  cat <<NML
+&run name = '$1', max_steps = 12, end_time = 1.0, dt = 4.0e-6, dt_mode = 'fixed', overwrite = .true.,
+     progress_interval = 4 /
+&scene fluid = 'resolved', particles = 'prescribed', ibm_coupling = '$2' /
+&grid nx = $6, ny = $6, nz = $6, length_x = 1.0e-3, length_y = 1.0e-3, length_z = 1.0e-3 /
+&fluid viscosity = 1.0e-6, viscous_scheme = '$3', init = 'rest', pressure_scheme = 'incremental' /
+&bodies count = 2,
+  shape(1) = 'sphere', radius(1) = 1.6e-4, centre(:,1) = 0.3e-3, 0.4e-3, 0.5e-3,
+  velocity(:,1) = 2.0e-3, 0.0, 1.0e-3,
+  shape(2) = '$5', radius(2) = 1.3e-4, aspect_ratio(2) = 2.0, centre(:,2) = 0.7e-3, 0.6e-3, 0.98e-3,
+  axis(:,2) = 1.0, 1.0, 0.5, angular_velocity(:,2) = 0.0, 30.0, 10.0,
+  driving_force = 5.0, 0.0, -2.0, load_method = '$4' /
+&output directory = '$1', checkpoint_interval = 0, field_interval = 0.0 /
+NML
+}
+run() { # ranks, deck file
+  mpirun -np "$1" "$AGGLO" "$2" > "$2.out" 2>&1
+}
+
+for coupling in implicit explicit; do
+  deck one_$coupling $coupling explicit momentum needle 32 > one_$coupling.nml
+  deck two_$coupling $coupling explicit momentum needle 32 > two_$coupling.nml
+  if run 1 one_$coupling.nml && run 2 two_$coupling.nml; then
+    if python3 - one_$coupling/bodies_loads.dat two_$coupling/bodies_loads.dat > cmp.txt 2>&1 <<'PY'
+import sys
+a = [l.split() for l in open(sys.argv[1]) if not l.startswith('#')]
+b = [l.split() for l in open(sys.argv[2]) if not l.startswith('#')]
+assert len(a) == len(b) == 24, f'rows {len(a)} {len(b)} (24 = 2 bodies x 12 steps)'
+scale = max(abs(float(x)) for r in a for x in r[3:9])
+worst = max(abs(float(x) - float(y)) for r, s in zip(a, b) for x, y in zip(r[3:9], s[3:9]))
+assert scale > 0 and worst <= 1e-10 * scale, f'worst {worst:.3e} scale {scale:.3e}'
+print(f'worst difference {worst:.2e} of largest load {scale:.2e}')
+PY
+    then
+      echo "PASS immersed_runs/${coupling}_one_and_two_ranks_equal  ($(cat cmp.txt))"
+    else
+      echo "FAIL immersed_runs/${coupling}_one_and_two_ranks_equal: $(head -c 400 cmp.txt)"
+    fi
+    if grep -q 'immersed boundary: sweeps' two_$coupling.nml.out; then
+      echo "PASS immersed_runs/${coupling}_log_names_sweeps  ($(grep 'immersed boundary: sweeps' two_$coupling.nml.out | tail -n 1 | head -c 160))"
+    else
+      echo "FAIL immersed_runs/${coupling}_log_names_sweeps: no sweeps line in the log"
+    fi
+  else
+    echo "FAIL immersed_runs/${coupling}_one_and_two_ranks_equal: a run failed: $(tail -n 3 ./*_$coupling.nml.out | head -c 400)"
+  fi
+done
+
+refused() { # test name, deck file, expected text in the message
+  if run 1 "$2"; then
+    echo "FAIL immersed_runs/$1: the deck ran"
+  elif grep -q "$3" "$2.out"; then
+    echo "PASS immersed_runs/$1  ($(grep -m1 "$3" "$2.out" | head -c 200))"
+  else
+    echo "FAIL immersed_runs/$1: message without '$3': $(tail -n 3 "$2.out" | head -c 300)"
+  fi
+}
+deck cn implicit crank_nicolson momentum needle 32 > cn.nml
+refused refuses_crank_nicolson_with_bodies cn.nml 'viscous_scheme'
+deck surface implicit explicit surface needle 32 > surface.nml
+refused refuses_surface_loads surface.nml 'load_method'
+deck thin implicit explicit momentum disk 16 > thin.nml
+refused refuses_thin_disk_with_grid thin.nml 'nx = ny = nz >='
