@@ -9,7 +9,8 @@ module namelist_text
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   implicit none
   private
-  public :: namelist_item_t, read_namelist_items, item_is_text, item_text_fills, item_tokens, item_is_finite
+  public :: namelist_item_t, read_namelist_items, item_is_text, item_text_fills, item_text_values, item_tokens, &
+            item_is_finite
 
   type :: namelist_item_t
     character(len=:), allocatable :: group      !< group name, lower case
@@ -102,19 +103,80 @@ contains
   !> A character value (written between quotes).
   pure logical function item_is_text(item)
     type(namelist_item_t), intent(in) :: item
+    integer :: first
+    first = verify(item%value, '0123456789*')   ! past a repeat count "r*"
     item_is_text = .false.
-    if (len(item%value) > 0) item_is_text = (item%value(1:1) == '''' .or. item%value(1:1) == '"')
+    if (first > 0) item_is_text = (item%value(first:first) == '''' .or. item%value(first:first) == '"')
   end function item_is_text
 
-  !> A character value that fills its variable to the last character: the written text is padded
-  !> to the variable's length, so a value that reaches the end may have been cut when read.
-  pure logical function item_text_fills(item)
+  !> A character item in which some element fills its variable to the last character: the written
+  !> text is padded to the variable's length, so a value that reaches the end may have been cut
+  !> when read.
+  logical function item_text_fills(item)
     type(namelist_item_t), intent(in) :: item
-    integer :: n
-    n = len(item%value)
+    character(len=:), allocatable :: values(:)
+    integer :: k, n
     item_text_fills = .false.
-    if (item_is_text(item) .and. n >= 3) item_text_fills = (item%value(n - 1:n - 1) /= ' ')
+    if (.not. item_is_text(item)) return
+    values = item_text_values(item)
+    n = len(values)
+    if (n == 0) return
+    do k = 1, size(values)
+      if (values(k)(n:n) /= ' ') item_text_fills = .true.
+    end do
   end function item_text_fills
+
+  !> The elements of a character item as written, padding kept ("r*'v'" expanded to r copies; a
+  !> doubled quote inside the text is one quote).
+  function item_text_values(item) result(values)
+    type(namelist_item_t), intent(in) :: item
+    character(len=:), allocatable :: values(:)
+    character(len=:), allocatable :: text, element
+    character(len=1) :: quote
+    integer :: i, repeats, star, r, ios, longest
+    allocate(character(len=len(item%value)) :: values(0))
+    longest = 0
+    text = item%value
+    i = 1
+    do while (i <= len(text))
+      if (scan(text(i:i), ' ,') > 0) then
+        i = i + 1
+        cycle
+      end if
+      repeats = 1
+      star = index(text(i:), '*')
+      if (star > 1) then
+        if (verify(text(i:i + star - 2), '0123456789') == 0) then
+          read(text(i:i + star - 2), *, iostat=ios) repeats
+          if (ios /= 0) repeats = 1
+          i = i + star
+        end if
+      end if
+      quote = text(i:i)
+      element = ''
+      i = i + 1
+      do while (i <= len(text))
+        if (text(i:i) == quote) then
+          if (i < len(text)) then
+            if (text(i + 1:i + 1) == quote) then
+              element = element//quote
+              i = i + 2
+              cycle
+            end if
+          end if
+          exit
+        end if
+        element = element//text(i:i)
+        i = i + 1
+      end do
+      i = i + 1
+      longest = max(longest, len(element))
+      do r = 1, max(repeats, 1)
+        values = [character(len=len(item%value)) :: values, element]
+      end do
+    end do
+    values = [character(len=longest) :: values]
+  end function item_text_values
 
   !> The values of a non-character item, one per element ("r*v" repeat counts expanded to r copies).
   function item_tokens(item) result(tokens)

@@ -11,7 +11,7 @@ program test_config_round_trip
   use agglo_config, only: agglo_config_t, config_items, deck_group_names
   use config_reader, only: read_groups
   use deck_file, only: deck_t
-  use namelist_text, only: namelist_item_t, item_is_text, item_tokens
+  use namelist_text, only: namelist_item_t, item_is_text, item_text_values, item_tokens
   use test_framework, only: test_start, test_finish, check
   implicit none
   type(agglo_config_t) :: defaults, mutated, after
@@ -21,6 +21,7 @@ program test_config_round_trip
   character(len=:), allocatable :: wrong
   integer :: k, g, n
   logical :: found
+  integer, parameter :: longest_value = 8000   !< room for a mutated array of about 300 reals
 
   call test_start('config_round_trip')
   default_items = config_items(defaults)
@@ -35,8 +36,8 @@ program test_config_round_trip
   end do
 
   ! The mutated deck: one "name = value" line per variable, grouped as written.
-  allocate(character(len=600) :: mutated_values(n))
-  allocate(character(len=700) :: deck%lines(n + 2 * size(deck_group_names)))
+  allocate(character(len=longest_value) :: mutated_values(n))
+  allocate(character(len=longest_value + 100) :: deck%lines(n + 2 * size(deck_group_names)))
   deck%lines = ''
   deck%path = 'round-trip deck'
   g = 0
@@ -82,17 +83,20 @@ program test_config_round_trip
 
 contains
 
-  !> A value of the same type that differs from the default: text 'zq', the other logical, an
-  !> integer plus one, a real 0.5 x + 0.375 k for element k (never x itself).
+  !> A value of the same type that differs from the default: text 'zq' in every element, the other
+  !> logical, an integer plus one, a real 0.5 x + 0.375 k for element k (never x itself).
   function mutate(item) result(text)
     type(namelist_item_t), intent(in) :: item
-    character(len=600) :: text
+    character(len=longest_value) :: text
     character(len=64), allocatable :: tokens(:)
     character(len=32) :: number
     real(wp) :: x, y
     integer :: i, j, ios
     if (item_is_text(item)) then
       text = '''zq'''
+      do j = 2, size(item_text_values(item))
+        text = trim(text)//', ''zq'''
+      end do
       return
     end if
     tokens = item_tokens(item)
@@ -123,13 +127,14 @@ contains
     type(namelist_item_t) :: set_item
     real(wp) :: a, b
     integer :: j, ios_a, ios_b
-    if (item_is_text(item)) then
-      same_value = (trim(item%value(2:len(item%value) - 1)) == set_text(2:len(set_text) - 1))
-      return
-    end if
     set_item%group = item%group
     set_item%name = item%name
     set_item%value = set_text
+    if (item_is_text(item)) then
+      same_value = size(item_text_values(item)) == size(item_text_values(set_item))
+      if (same_value) same_value = all(item_text_values(item) == item_text_values(set_item))
+      return
+    end if
     got = item_tokens(item)
     want = item_tokens(set_item)
     same_value = (size(got) == size(want))
