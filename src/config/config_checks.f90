@@ -3,7 +3,7 @@
 module config_checks
   use agglo_kinds, only: wp
   use agglo_config, only: agglo_config_t, config_items
-  use namelist_text, only: namelist_item_t, item_is_text, item_text_fills, item_is_finite
+  use namelist_text, only: namelist_item_t, item_is_text, item_text_fills, item_text_values, item_is_finite
   use deck_file, only: int_text, real_text
   use config_forcing, only: forcing_mode_extent
   use error_handling, only: input_error, fatal
@@ -32,15 +32,29 @@ contains
     items = config_items(cfg)
     do k = 1, size(items)
       if (item_text_fills(items(k))) then
-        n = len(items(k)%value) - 2
-        call input_error(items(k)%group, items(k)%name, items(k)%value(1:min(n + 1, 41))// &
-            merge('...''', '    ', n > 40)//' ('//int_text(n)//' characters or more)', &
+        n = len(item_text_values(items(k)))   ! the variable's length: the written text is padded to it
+        call input_error(items(k)%group, items(k)%name, filling_text(item_text_values(items(k)), n), &
             'at most '//int_text(n - 1)//' characters')
       end if
       if (.not. item_is_finite(items(k))) call input_error(items(k)%group, items(k)%name, &
           squeeze(items(k)%value), 'finite numbers (no NaN or Infinity)')
     end do
   end subroutine check_every_value
+
+  !> The first element that fills its variable (n characters), quoted and cut to 40 characters.
+  function filling_text(values, n) result(text)
+    character(len=*), intent(in) :: values(:)
+    integer, intent(in) :: n
+    character(len=:), allocatable :: text
+    integer :: k
+    text = ''
+    do k = 1, size(values)
+      if (values(k)(n:n) == ' ') cycle
+      text = ''''//values(k)(1:min(n, 40))//merge('...''', '''   ', n > 40)
+      text = trim(text)//' ('//int_text(n)//' characters or more)'
+      return
+    end do
+  end function filling_text
 
   !> The text with runs of blanks shortened to one blank, none after a repeat count ("3*NaN").
   pure function squeeze(text) result(out)
