@@ -183,7 +183,8 @@ contains
     if (sliced) then
       if (.not. derivative) index(3) = index(2)   ! weight 0: any valid index
       if (index(1) < 0 .or. index(3) > n_local + 1) &
-          call fatal('field_interpolation: point outside the slab of this rank (use point_on_this_rank)')
+          call fatal('field_interpolation: point outside the slab of this rank (use point_on_this_rank)', &
+                     collective=.false.)
     end if
   end subroutine axis_stencil
 end module field_interpolation
