@@ -12,7 +12,7 @@ module fluid_monitor
   use timer_registry, only: timer_breakdown
   implicit none
   private
-  public :: statistics_open, statistics_write, statistics_close, progress_line, timing_report
+  public :: statistics_open, statistics_write, statistics_close, progress_line, timing_report, drop_rows_after
 
   integer :: statistics_unit = -1
   type(progress_meter_t) :: meter
@@ -30,7 +30,7 @@ contains
     if (.not. is_root()) return
     inquire(file=path, exist=exists)
     if (append .and. exists) then
-      call drop_rows_after(path, last_step)
+      call drop_rows_after(path, last_step, 6)
       open(newunit=statistics_unit, file=path, status='old', position='append', action='write')
     else
       open(newunit=statistics_unit, file=path, status='replace', action='write')
@@ -40,16 +40,18 @@ contains
     end if
   end subroutine statistics_open
 
-  !> Rewrite path with its '#' header lines and its rows up to step last_step, through path.tmp and
-  !> an atomic rename (a run killed meanwhile leaves the old file intact). Reading stops at the first
-  !> row past last_step or the first row that is not a complete row of 7 numbers (a row torn by a
-  !> kill): rows are written in step order and the checkpoint of last_step was written after its row.
-  subroutine drop_rows_after(path, last_step)
+  !> Rewrite a text time series (rows "step value ...", '#' header lines) with its rows up to step
+  !> last_step, through path.tmp and an atomic rename (a run killed meanwhile leaves the old file
+  !> intact), for a restart from the checkpoint of last_step. Reading stops at the first row past
+  !> last_step or the first row that is not a step and numbers_per_row numbers (a row torn by a
+  !> kill): rows are written in step order and the checkpoint of last_step was written after its rows.
+  subroutine drop_rows_after(path, last_step, numbers_per_row)
     character(len=*), intent(in) :: path
     integer(i8), intent(in) :: last_step
-    character(len=512) :: line
+    integer, intent(in) :: numbers_per_row
+    character(len=1024) :: line
     integer(i8) :: step
-    real(wp) :: values(6)
+    real(wp) :: values(numbers_per_row)
     integer :: old_unit, new_unit, status
     logical :: renamed
     open(newunit=old_unit, file=path, status='old', action='read')

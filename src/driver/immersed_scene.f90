@@ -12,6 +12,7 @@ module immersed_scene
   use error_handling, only: fatal
   use parallel_env, only: is_root
   use logger, only: log_line
+  use fluid_monitor, only: drop_rows_after
   use text_format, only: real_text, int_text
   use timer_registry, only: timer_register, timer_tic, timer_toc
   use fluid_grid, only: fluid_grid_t, allocate_field
@@ -195,20 +196,25 @@ contains
   end function motion_velocity
 
   !> Open the loads time series (root; a new file with its header, or appended on restart).
-  subroutine loads_open(scene, path, append)
+  subroutine loads_open(scene, path, append, last_step)
     type(immersed_scene_t), intent(inout) :: scene
     character(len=*), intent(in) :: path
     logical, intent(in) :: append
+    integer(i8), intent(in) :: last_step   !< on a restart: the checkpoint's step (later rows are dropped)
     integer :: ios
+    logical :: exists
     character(len=256) :: message
     if (.not. is_root()) return
+    inquire(file=path, exist=exists)
+    ! A row: step, then time, body, force(3), torque(3), sweeps, residual, slip, divergence.
+    if (append .and. exists) call drop_rows_after(path, last_step, 12)
     if (append) then
       open(newunit=scene%loads_unit, file=path, status='unknown', position='append', action='write', iostat=ios, &
            iomsg=message)
     else
       open(newunit=scene%loads_unit, file=path, status='replace', action='write', iostat=ios, iomsg=message)
     end if
-    if (ios /= 0) call fatal('immersed scene: cannot open '//path//': '//trim(message))
+    if (ios /= 0) call fatal('immersed scene: cannot open '//path//': '//trim(message), collective=.false.)
     scene%loads_opened = .true.
     if (.not. append) write(scene%loads_unit, '(a)') '# step time_s body force_x_N force_y_N force_z_N ' // &
         'torque_x_Nm torque_y_Nm torque_z_Nm sweeps residual slip divergence_per_s'

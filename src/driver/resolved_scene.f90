@@ -131,7 +131,7 @@ contains
       settings%fluid_density = cfg%fluid%density
       call immersed_scene_create(bodies, solver, motions_from_config(cfg%bodies, solver%grid), settings, &
                                  cfg%bodies%driving_force)
-      call loads_open(bodies, run_file('bodies_loads.dat'), append=cfg%run%restart)
+      call loads_open(bodies, run_file('bodies_loads.dat'), append=cfg%run%restart, last_step=solver%step)
       if (bodies%moving .and. solver%incremental_pressure) call log_line('immersed boundary: note: moving '// &
           'bodies with &fluid pressure_scheme = ''incremental'' give force spikes when nodes are uncovered '// &
           '(the pressure inside a body enters u*); ''non_incremental'' avoids them (docs/validation.md)')

@@ -5,6 +5,7 @@
 #    the rank boundary and the periodic wrap): every load in bodies_loads.dat equal to 1e-10 of the
 #    largest load (round-off; the Jacobi ghost sweeps do not depend on the ranks), for both couplings;
 #  - the file has one row per body per step and the log names the sweeps and the residual;
+#  - a restart continues bodies_loads.dat bit for bit (rows after the checkpoint dropped);
 #  - refused decks, before any step, with a message naming the variable: Crank-Nicolson diffusion
 #    with bodies, load_method = 'surface', a disk thinner than 4 cells (the message gives the grid).
 # Prints PASS/FAIL lines; works in a temporary directory.
@@ -78,3 +79,19 @@ deck surface implicit explicit surface needle 32 > surface.nml
 refused refuses_surface_loads surface.nml 'load_method'
 deck thin implicit explicit momentum disk 16 > thin.nml
 refused refuses_thin_disk_with_grid thin.nml 'nx = ny = nz >='
+
+# Restart (docs/outputs.md bodies_loads.dat): the moving bodies' run checkpointed at step 6, its
+# last checkpoint (step 12) deleted as if killed there, restarted: the rows after step 6 are dropped
+# and written again, and the file equals the uninterrupted run's to the bit (the body motion is a
+# function of time; the fluid, with the values left at uncovered nodes, is in the checkpoint).
+deck restart implicit explicit momentum needle 32 | sed 's/checkpoint_interval = 0/checkpoint_interval = 6/' > restart.nml
+if run 1 restart.nml && cp restart/bodies_loads.dat uninterrupted.dat && rm restart/checkpoints/checkpoint_0000000012.h5 \
+   && mpirun -np 1 "$AGGLO" restart.nml --set run.restart=.true. > restart.out 2>&1; then
+  if cmp -s uninterrupted.dat restart/bodies_loads.dat; then
+    echo "PASS immersed_runs/restart_continues_loads_bit_for_bit  ($(grep -vc '^#' restart/bodies_loads.dat) rows)"
+  else
+    echo "FAIL immersed_runs/restart_continues_loads_bit_for_bit: $(diff uninterrupted.dat restart/bodies_loads.dat | head -c 300)"
+  fi
+else
+  echo "FAIL immersed_runs/restart_continues_loads_bit_for_bit: a run failed: $(tail -n 3 restart.out restart.nml.out 2>/dev/null | head -c 400)"
+fi
