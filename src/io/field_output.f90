@@ -27,7 +27,7 @@
 module field_output
   use agglo_kinds, only: wp, i8
   use error_handling, only: fatal
-  use text_format, only: real_text => exact_real_text
+  use text_format, only: real_text => exact_real_text, int_text
   use file_system, only: rename_file, remove_path
   use parallel_env, only: is_root, barrier
   use run_directory, only: run_directory_path, run_file, record_run_file, forget_run_file
@@ -184,7 +184,7 @@ contains
         if (ios /= 0 .or. snapshot_step <= step) cycle
         call remove_path(directory//'/'//trim(names(i)), ok)
         call forget_run_file(trim(names(i)))
-        call log_line('restart: '//trim(names(i))//' (written after step '//step_text(step)// &
+        call log_line('restart: '//trim(names(i))//' (written after step '//int_text(step)// &
                       ' by the interrupted run) removed')
         removed = removed + 1
       end do
@@ -192,14 +192,6 @@ contains
     end if
     call barrier()
   end subroutine discard_snapshots_after
-
-  function step_text(step) result(text)
-    integer(i8), intent(in) :: step
-    character(len=:), allocatable :: text
-    character(len=24) :: buffer
-    write(buffer, '(i0)') step
-    text = trim(buffer)
-  end function step_text
 
   subroutine write_field_snapshot_i8(names, locations, fields, z_offset, global_shape, lengths, time, step, directory)
     character(len=*), intent(in) :: names(:), locations(:)

@@ -8,6 +8,7 @@
 module json_writer
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use agglo_kinds, only: wp, i8
+  use text_format, only: int_text
   implicit none
   private
   public :: json_object_t, json_add, json_add_null, json_text, json_string, json_real
@@ -59,9 +60,7 @@ contains
     type(json_object_t), intent(inout) :: object
     character(len=*), intent(in) :: key
     integer(i8), intent(in) :: value
-    character(len=24) :: buffer
-    write(buffer, '(i0)') value
-    call add_member(object, key, trim(buffer))
+    call add_member(object, key, int_text(value))
   end subroutine add_i8
 
   subroutine add_logical(object, key, value)

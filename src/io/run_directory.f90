@@ -16,6 +16,7 @@
 module run_directory
   use agglo_config, only: agglo_config_t, write_config
   use error_handling, only: fatal, input_error
+  use text_format, only: int_text
   use parallel_env, only: is_root, barrier
   use file_system, only: rename_file, file_exists, make_directory, remove_path
   use directory_listing, only: list_directory, name_length
@@ -87,14 +88,14 @@ contains
       if (len(directory) + len(longest_parallel_name) > longest_parallel_path) then
         write(length_text, '(i0)') len(directory)
         call input_error('output', 'directory', ''''//directory//''' ('//trim(length_text)//' characters)', &
-            'a path of at most '//limit_text(longest_parallel_path - len(longest_parallel_name))// &
+            'a path of at most '//int_text(longest_parallel_path - len(longest_parallel_name))// &
             ' characters (the longest file path written through MPI-IO, <directory>'//longest_parallel_name// &
-            ', must stay within '//limit_text(longest_parallel_path)//')')
+            ', must stay within '//int_text(longest_parallel_path)//')')
       end if
       if (trim(cfg%fluid%init) == 'file' .and. len_trim(cfg%fluid%init_file) > longest_parallel_path) then
         write(length_text, '(i0)') len_trim(cfg%fluid%init_file)
         call input_error('fluid', 'init_file', ''''//trim(cfg%fluid%init_file)//''' ('//trim(length_text)// &
-            ' characters)', 'a path of at most '//limit_text(longest_parallel_path)//' characters (read through MPI-IO)')
+            ' characters)', 'a path of at most '//int_text(longest_parallel_path)//' characters (read through MPI-IO)')
       end if
     end if
     if (is_root()) then
@@ -137,20 +138,12 @@ contains
     call barrier()
   end subroutine confirm_run_deck
 
-  function limit_text(value) result(text)
-    integer, intent(in) :: value
-    character(len=:), allocatable :: text
-    character(len=16) :: buffer
-    write(buffer, '(i0)') value
-    text = trim(buffer)
-  end function limit_text
-
   !> Add name to the manifest if it is new (rank 0), rewriting the manifest file.
   subroutine record(name)
     character(len=*), intent(in) :: name
     if (len(name) == 0 .or. .not. allocated(recorded)) return
     if (len(name) > name_length) call fatal('run_directory: file name longer than '// &
-                                            limit_text(name_length)//' characters: '//name, collective=.false.)
+                                            int_text(name_length)//' characters: '//name, collective=.false.)
     if (any(recorded(1:n_recorded) == name)) return
     call append_recorded(name)
     call write_manifest()

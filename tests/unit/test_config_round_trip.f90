@@ -12,6 +12,7 @@ program test_config_round_trip
   use config_reader, only: read_groups
   use deck_file, only: deck_t
   use namelist_text, only: namelist_item_t, item_is_text, item_text_values, item_tokens
+  use text_format, only: int_text
   use test_framework, only: test_start, test_finish, check
   implicit none
   type(agglo_config_t) :: defaults, mutated, after
@@ -26,7 +27,7 @@ program test_config_round_trip
   call test_start('config_round_trip')
   default_items = config_items(defaults)
   n = size(default_items)
-  call check(n >= 60, 'every_variable_is_written', 'variables: '//itoa(n))
+  call check(n >= 60, 'every_variable_is_written', 'variables: '//int_text(n))
   do g = 1, size(deck_group_names)
     found = .false.
     do k = 1, n
@@ -149,12 +150,4 @@ contains
       end if
     end do
   end function same_value
-
-  function itoa(value) result(text)
-    integer, intent(in) :: value
-    character(len=:), allocatable :: text
-    character(len=16) :: buffer
-    write(buffer, '(i0)') value
-    text = trim(buffer)
-  end function itoa
 end program test_config_round_trip
