@@ -11,7 +11,7 @@ module error_handling
   use logger, only: log_error_line, log_is_root, log_close
   implicit none
   private
-  public :: fatal, input_error
+  public :: fatal, input_error, input_error_text
 
   integer, parameter :: abort_code = 2
 
@@ -57,7 +57,13 @@ contains
   !> A deck error naming the namelist group, the variable, the bad value and the allowed range.
   subroutine input_error(group, variable, value, allowed)
     character(len=*), intent(in) :: group, variable, value, allowed
-    call fatal('deck: &'//trim(group)//' '//trim(variable)//' = '//trim(value)// &
-               ' is not allowed; allowed: '//trim(allowed))
+    call fatal(input_error_text(group, variable, value, allowed))
   end subroutine input_error
+
+  !> The message of input_error, for a check that only some ranks make (the caller shares it first).
+  function input_error_text(group, variable, value, allowed) result(message)
+    character(len=*), intent(in) :: group, variable, value, allowed
+    character(len=:), allocatable :: message
+    message = 'deck: &'//trim(group)//' '//trim(variable)//' = '//trim(value)//' is not allowed; allowed: '//trim(allowed)
+  end function input_error_text
 end module error_handling

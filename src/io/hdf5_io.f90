@@ -43,7 +43,7 @@ module hdf5_io
   use agglo_kinds, only: wp, i8
   use error_handling, only: fatal
   use file_system, only: file_exists, rename_file
-  use parallel_env, only: my_rank, barrier
+  use parallel_env, only: my_rank, barrier, all_ranks
   implicit none
   private
   public :: h5_file_t, h5_create, h5_open, h5_close, h5_flush, h5_exists, &
@@ -192,18 +192,29 @@ contains
     logical, intent(in), optional :: serial
     integer(hid_t) :: access
     integer :: status
+    logical :: found
     call open_library()
     file%path = trim(path)
     file%serial = .false.
     if (present(serial)) file%serial = serial
-    if (.not. file_exists(file%path)) call fatal('hdf5_io: cannot open '//file%path//': no such file', &
-                                                 collective=.not. file%serial)
+    if (file%serial) then
+      found = file_exists(file%path)
+    else   ! each rank looks for itself (another node may not see the file): all stop together
+      found = all_ranks(file_exists(file%path))
+    end if
+    if (.not. found) call fatal('hdf5_io: cannot open '//file%path//': no such file', collective=.not. file%serial)
     call require_path_length(file)
     call make_property_lists(file, access)
     if (writable) then
       call h5fopen_f(file%path, H5F_ACC_RDWR_F, file%id, status, access_prp=access)
     else
       call h5fopen_f(file%path, H5F_ACC_RDONLY_F, file%id, status, access_prp=access)
+    end if
+    ! A parallel open that failed anywhere stops every rank: with a clean exit where it failed on all
+    ! of them (e.g. an init_file that is not an HDF5 file); a rank holding the file open aborts instead.
+    if (.not. file%serial) then
+      if (.not. all_ranks(status >= 0)) call fatal('hdf5_io: cannot open '//file%path// &
+          ' (not an HDF5 file, or not writable?)', collective=(status < 0))
     end if
     call require_ok(status, 'opening the file (not an HDF5 file, or not writable?)', file)
     call h5pclose_f(access, status)

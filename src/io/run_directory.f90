@@ -15,9 +15,9 @@
 !> (confirm_run_deck): a refused restart leaves the earlier run.nml as it was.
 module run_directory
   use agglo_config, only: agglo_config_t, write_config
-  use error_handling, only: fatal, input_error
+  use error_handling, only: fatal, input_error, input_error_text
   use text_format, only: int_text
-  use parallel_env, only: is_root, barrier
+  use parallel_env, only: is_root, barrier, root_text
   use file_system, only: rename_file, file_exists, make_directory, remove_path
   use directory_listing, only: list_directory, name_length
   use hdf5_io, only: longest_parallel_path
@@ -76,9 +76,8 @@ contains
 
   subroutine prepare_run_directory(cfg)
     type(agglo_config_t), intent(in) :: cfg
-    logical :: has_run, ok
-    integer :: unit, ios
-    character(len=:), allocatable :: reason
+    logical :: has_run
+    character(len=:), allocatable :: problem
     character(len=16) :: length_text
     directory = trim(cfg%output%directory)
     if (len(directory) == 0) directory = 'output/'//trim(cfg%run%name)
@@ -98,21 +97,11 @@ contains
             ' characters)', 'a path of at most '//int_text(longest_parallel_path)//' characters (read through MPI-IO)')
       end if
     end if
+    problem = ''
+    if (is_root()) problem = directory_problem(cfg, has_run)
+    problem = root_text(problem)
+    if (len(problem) > 0) call fatal(problem)
     if (is_root()) then
-      has_run = file_exists(directory//'/run.nml')
-      if (cfg%run%restart) then
-        if (.not. has_run) call input_error('run', 'restart', '.true.', &
-            '.false. (no earlier run found in '//directory//' to continue)')
-      else if (has_run .and. .not. cfg%run%overwrite) then
-        call input_error('output', 'directory', ''''//directory//'''', &
-            'a directory without an earlier run in it, or set &run overwrite = .true. to replace that run')
-      end if
-      call make_directory(directory, ok, reason)
-      if (.not. ok) call input_error('output', 'directory', ''''//directory//'''', &
-          'a directory that can be created (mkdir: '//reason//')')
-      open(newunit=unit, file=directory//'/.agglo_write_probe', status='replace', action='write', iostat=ios)
-      if (ios /= 0) call input_error('output', 'directory', ''''//directory//'''', 'a writable directory')
-      close(unit, status='delete')
       allocate(recorded(64))
       n_recorded = 0
       if (cfg%run%restart) then
@@ -127,6 +116,39 @@ contains
     end if
     call barrier()
   end subroutine prepare_run_directory
+
+  !> The deck error of the run directory, or '' if it may be used (rank 0 alone looks at the file
+  !> system; prepare_run_directory shares the verdict so that every rank stops on it together).
+  function directory_problem(cfg, has_run) result(problem)
+    type(agglo_config_t), intent(in) :: cfg
+    logical, intent(out) :: has_run
+    character(len=:), allocatable :: problem
+    logical :: ok
+    integer :: unit, ios
+    character(len=:), allocatable :: reason
+    problem = ''
+    has_run = file_exists(directory//'/run.nml')
+    if (cfg%run%restart) then
+      if (.not. has_run) problem = input_error_text('run', 'restart', '.true.', &
+          '.false. (no earlier run found in '//directory//' to continue)')
+    else if (has_run .and. .not. cfg%run%overwrite) then
+      problem = input_error_text('output', 'directory', ''''//directory//'''', &
+          'a directory without an earlier run in it, or set &run overwrite = .true. to replace that run')
+    end if
+    if (len(problem) > 0) return
+    call make_directory(directory, ok, reason)
+    if (.not. ok) then
+      problem = input_error_text('output', 'directory', ''''//directory//'''', &
+          'a directory that can be created (mkdir: '//reason//')')
+      return
+    end if
+    open(newunit=unit, file=directory//'/.agglo_write_probe', status='replace', action='write', iostat=ios)
+    if (ios /= 0) then
+      problem = input_error_text('output', 'directory', ''''//directory//'''', 'a writable directory')
+      return
+    end if
+    close(unit, status='delete')
+  end function directory_problem
 
   !> After a restart has restored the run: the resolved deck of this run segment goes to run.nml.
   !> Collective; nothing happens on a fresh run (run.nml was written by prepare_run_directory).

@@ -2,13 +2,14 @@
 module parallel_env
   use mpi_f08, only: MPI_Comm, MPI_COMM_WORLD, MPI_Init, MPI_Finalize, MPI_Comm_rank, MPI_Comm_size, &
                      MPI_Allreduce, MPI_IN_PLACE, MPI_SUM, MPI_MAX, MPI_DOUBLE_PRECISION, &
-                     MPI_Datatype, MPI_Initialized, MPI_Barrier
+                     MPI_Datatype, MPI_Initialized, MPI_Barrier, MPI_LOGICAL, MPI_LAND, MPI_Bcast, &
+                     MPI_INTEGER, MPI_CHARACTER
   use agglo_kinds, only: wp
   use logger, only: log_set_rank
   implicit none
   private
   public :: parallel_start, parallel_stop, my_rank, n_ranks, is_root, world, mpi_wp, &
-            global_sum, global_max, barrier
+            global_sum, global_max, barrier, all_ranks, root_text
 
   integer, protected :: my_rank = 0
   integer, protected :: n_ranks = 1
@@ -52,4 +53,25 @@ contains
   subroutine barrier()
     call MPI_Barrier(world)
   end subroutine barrier
+
+  !> .true. on every rank if local is .true. on every rank. Turns a check each rank makes for
+  !> itself (a file it sees) into one answer, so that a failure stops every rank together.
+  logical function all_ranks(local)
+    logical, intent(in) :: local
+    all_ranks = local
+    call MPI_Allreduce(MPI_IN_PLACE, all_ranks, 1, MPI_LOGICAL, MPI_LAND, world)
+  end function all_ranks
+
+  !> Rank 0's text on every rank (the other ranks' text is ignored), e.g. the verdict of a check
+  !> only rank 0 makes ('' = passed), so that every rank stops on it together.
+  function root_text(text) result(shared)
+    character(len=*), intent(in) :: text
+    character(len=:), allocatable :: shared
+    integer :: length
+    length = len(text)
+    call MPI_Bcast(length, 1, MPI_INTEGER, 0, world)
+    allocate(character(len=length) :: shared)
+    if (my_rank == 0) shared = text
+    if (length > 0) call MPI_Bcast(shared, length, MPI_CHARACTER, 0, world)
+  end function root_text
 end module parallel_env
