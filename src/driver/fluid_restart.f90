@@ -7,7 +7,9 @@
 !> fluid/time, fluid/dt_old (s); fluid/step (integer(i8)); fluid/has_history (0 | 1).
 module fluid_restart
   use agglo_kinds, only: wp, i8
-  use error_handling, only: fatal
+  use error_handling, only: fatal, input_error
+  use file_system, only: file_exists
+  use parallel_env, only: all_ranks
   use text_format, only: int_text, real_text
   use hdf5_io, only: h5_file_t, h5_open, h5_close, h5_exists, h5_write_slab, h5_read_slab, h5_write_array, &
                      h5_read_array
@@ -97,6 +99,9 @@ contains
     character(len=*), intent(in) :: path
     type(h5_file_t) :: file
     character(len=:), allocatable :: group
+    ! Every rank looks for itself (another node may not see the file); all stop together.
+    if (.not. all_ranks(file_exists(path))) call input_error('fluid', 'init_file', ''''//trim(path)//'''', &
+        'an existing file: a field snapshot (fields_*.h5) or a checkpoint of an earlier run')
     call h5_open(file, path, writable=.false.)
     if (h5_exists(file, 'fields/u')) then
       group = 'fields/'
