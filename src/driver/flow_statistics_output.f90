@@ -13,6 +13,7 @@ module flow_statistics_output
   use run_directory, only: run_file
   use timer_registry, only: timer_tic, timer_toc
   use file_system, only: file_exists
+  use parallel_env, only: any_rank
   use hdf5_io, only: h5_file_t, h5_create, h5_open, h5_close, h5_exists, h5_append, h5_write_array, h5_read_array, &
                      h5_truncate, h5_delete
   use fluid_solver, only: fluid_solver_t
@@ -57,7 +58,8 @@ contains
     if (forced) output%average_start = cfg%forcing%average_start
     if (output%interval <= 0) return
     output%path = run_file('flow_statistics.h5')
-    if (cfg%run%restart .and. file_exists(output%path)) then
+    ! One answer for all ranks (each looks for itself): they must all open, or all create, the file.
+    if (cfg%run%restart .and. any_rank(file_exists(output%path))) then
       call drop_rows_after(output%path, solver%step)
     else
       call h5_create(file, output%path)

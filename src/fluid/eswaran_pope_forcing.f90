@@ -289,7 +289,7 @@ contains
     real(wp), intent(in) :: dt
     real(wp) :: ratio, decay, amplitude
     integer :: m, c
-    if (.not. self%ready) call fatal('forcing_advance: the forcing is not set up')
+    if (.not. self%ready) call fatal('forcing_advance: the forcing is not set up', collective=.false.)
     if (.not. (dt > 0.0_wp)) call fatal('forcing_advance: dt = '//real_text(dt)//' s; needs dt > 0')
     ratio = dt / self%time_scale
     select case (self%update_kind)
@@ -388,9 +388,10 @@ contains
   subroutine check_shape(self, field)
     type(ep_forcing_t), intent(in) :: self
     real(wp), intent(in) :: field(0:, 0:, 0:)
-    if (.not. self%ready) call fatal('forcing: evaluation before forcing_init')
+    if (.not. self%ready) call fatal('forcing: evaluation before forcing_init', collective=.false.)
     if (ubound(field, 1) < self%nx .or. ubound(field, 2) < self%ny .or. ubound(field, 3) < self%nz_local) &
-        call fatal('forcing: field array smaller than the local slab (0:nx+1, 0:ny+1, 0:nz_local+1)')
+        call fatal('forcing: field array smaller than the local slab (0:nx+1, 0:ny+1, 0:nz_local+1)', &
+                   collective=.false.)
   end subroutine check_shape
 
   !> The separable direct sum for one component: with target, target += scale f (target = scale f
@@ -490,7 +491,7 @@ contains
     type(ep_forcing_t), intent(inout) :: self
     integer(i8), intent(in) :: words(:)
     integer :: m, c, at
-    if (.not. self%ready) call fatal('forcing_unpack_state: the forcing is not set up')
+    if (.not. self%ready) call fatal('forcing_unpack_state: the forcing is not set up', collective=.false.)
     if (size(words) < state_header) call fatal('forcing: checkpoint forcing state is truncated')
     if (words(1) /= state_format) call fatal('forcing: checkpoint forcing state has an unknown format')
     if (words(2) /= int(self%n_pairs, i8) .or. size(words) /= forcing_state_size(self)) call fatal( &

@@ -170,7 +170,7 @@ contains
     real(wp) :: t0, t1, halo
     integer :: k, nzl
 
-    if (solver%stage /= stage_idle) call fatal('fluid_advance: called inside a staged step')
+    if (solver%stage /= stage_idle) call fatal('fluid_advance: called inside a staged step', collective=.false.)
     t0 = wall_time()
     nzl = solver%grid%nz_local
     c = step_coefficients(solver, dt)
@@ -228,7 +228,8 @@ contains
     real(wp) :: t0, t1, halo, alpha
     integer :: k
 
-    if (solver%stage /= stage_idle) call fatal('fluid_predict: the previous staged step is not finished')
+    if (solver%stage /= stage_idle) call fatal('fluid_predict: the previous staged step is not finished', &
+                                               collective=.false.)
     t0 = wall_time()
     c = step_coefficients(solver, dt)
     halo = refresh_pressure_halos(solver)
@@ -259,7 +260,8 @@ contains
   subroutine fluid_project(solver)
     type(fluid_solver_t), intent(inout) :: solver
     real(wp) :: t0, dt
-    if (solver%stage /= stage_predicted) call fatal('fluid_project: fluid_predict has not been called')
+    if (solver%stage /= stage_predicted) call fatal('fluid_project: fluid_predict has not been called', &
+                                                    collective=.false.)
     dt = solver%stage_coefficients%dt
     t0 = wall_time()
     call divergence_sweep(solver, dt)
@@ -274,7 +276,8 @@ contains
   !> halos must be current (a caller that changed u, v, w after fluid_project has refreshed them).
   subroutine fluid_finish_step(solver)
     type(fluid_solver_t), intent(inout) :: solver
-    if (solver%stage /= stage_projected) call fatal('fluid_finish_step: fluid_project has not been called')
+    if (solver%stage /= stage_projected) call fatal('fluid_finish_step: fluid_project has not been called', &
+                                                    collective=.false.)
     call rotate_history(solver, solver%stage_coefficients%dt)
     solver%stage = stage_idle
   end subroutine fluid_finish_step

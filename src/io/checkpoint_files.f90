@@ -60,7 +60,8 @@ contains
   function checkpoint_directory() result(path)
     character(len=:), allocatable :: path
     if (len(run_directory_path()) == 0) &
-      call fatal('checkpoint_files: the run directory is not set up (prepare_run_directory first)')
+      call fatal('checkpoint_files: the run directory is not set up (prepare_run_directory first)', &
+                 collective=.false.)   ! also reached from rank 0 alone (prune, newest_checkpoint)
     path = run_directory_path()//'/'//checkpoint_subdirectory
   end function checkpoint_directory
 
@@ -70,7 +71,8 @@ contains
     character(len=:), allocatable :: name
     character(len=step_digits) :: digits
     if (step < 0_i8 .or. step >= 10_i8**step_digits) &
-      call fatal('checkpoint_files: step outside 0 .. 9999999999 cannot name a checkpoint')
+      call fatal('checkpoint_files: step outside 0 .. 9999999999 cannot name a checkpoint', &
+                 collective=.false.)   ! also reached from rank 0 alone (prune)
     write(digits, '(i10.10)') step
     name = checkpoint_subdirectory//'/'//prefix//digits//suffix
   end function checkpoint_name

@@ -108,8 +108,10 @@ contains
     logical, intent(in) :: upward
     integer :: count
     count = size(plane)
-    if (count > size(slab%send_up)) call fatal('start_plane_shift: plane larger than the halo buffers')
-    if (slab%pending /= 0) call fatal('start_plane_shift: a halo exchange is already in flight')
+    if (count > size(slab%send_up)) call fatal('start_plane_shift: plane larger than the halo buffers', &
+                                               collective=.false.)
+    if (slab%pending /= 0) call fatal('start_plane_shift: a halo exchange is already in flight', &
+                                      collective=.false.)
     if (upward) then
       call plane_to_buffer(plane, slab%send_up)
       if (n_ranks == 1) then
@@ -168,7 +170,8 @@ contains
   subroutine post_both(slab, count)
     type(slab_t), intent(inout) :: slab
     integer, intent(in) :: count
-    if (slab%pending /= 0) call fatal('exchange_z_halos: a halo exchange is already in flight')
+    if (slab%pending /= 0) call fatal('exchange_z_halos: a halo exchange is already in flight', &
+                                      collective=.false.)
     call MPI_Irecv(slab%receive_below, count, mpi_wp, slab%rank_below, tag_up, world, slab%requests(1))
     call MPI_Irecv(slab%receive_above, count, mpi_wp, slab%rank_above, tag_down, world, slab%requests(2))
     call MPI_Isend(slab%send_up, count, mpi_wp, slab%rank_above, tag_up, world, slab%requests(3))

@@ -2,14 +2,14 @@
 module parallel_env
   use mpi_f08, only: MPI_Comm, MPI_COMM_WORLD, MPI_Init, MPI_Finalize, MPI_Comm_rank, MPI_Comm_size, &
                      MPI_Allreduce, MPI_IN_PLACE, MPI_SUM, MPI_MAX, MPI_DOUBLE_PRECISION, &
-                     MPI_Datatype, MPI_Initialized, MPI_Barrier, MPI_LOGICAL, MPI_LAND, MPI_Bcast, &
+                     MPI_Datatype, MPI_Initialized, MPI_Barrier, MPI_LOGICAL, MPI_LAND, MPI_LOR, MPI_Bcast, &
                      MPI_INTEGER, MPI_CHARACTER
   use agglo_kinds, only: wp
   use logger, only: log_set_rank
   implicit none
   private
   public :: parallel_start, parallel_stop, my_rank, n_ranks, is_root, world, mpi_wp, &
-            global_sum, global_max, barrier, all_ranks, root_text
+            global_sum, global_max, barrier, all_ranks, any_rank, root_text
 
   integer, protected :: my_rank = 0
   integer, protected :: n_ranks = 1
@@ -61,6 +61,13 @@ contains
     all_ranks = local
     call MPI_Allreduce(MPI_IN_PLACE, all_ranks, 1, MPI_LOGICAL, MPI_LAND, world)
   end function all_ranks
+
+  !> .true. on every rank if local is .true. on at least one rank.
+  logical function any_rank(local)
+    logical, intent(in) :: local
+    any_rank = local
+    call MPI_Allreduce(MPI_IN_PLACE, any_rank, 1, MPI_LOGICAL, MPI_LOR, world)
+  end function any_rank
 
   !> Rank 0's text on every rank (the other ranks' text is ignored), e.g. the verdict of a check
   !> only rank 0 makes ('' = passed), so that every rank stops on it together.

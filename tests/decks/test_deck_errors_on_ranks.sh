@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Deck errors that only rank 0 (or each rank for itself) can see, on 2 ranks: the run directory
-# (an earlier run without overwrite, restart without a run, a directory that cannot be made) and
-# &fluid init_file (missing, not an HDF5 file). Each must stop every rank together: exit status 2
-# (error_handling: a collective stop, no MPI_Abort), the message once, and no hang (a rank left
-# alone in a collective stop would wait for ever; deck_error_lib.sh stops it after stop_timeout).
+# (an earlier run without overwrite, restart without a run or without a checkpoint, a directory
+# that cannot be made) and &fluid init_file (missing, not an HDF5 file). Each must stop every rank
+# together: exit status 2 (error_handling: a collective stop, no MPI_Abort), and no hang (a rank
+# left alone in a collective stop would wait for ever; deck_error_lib.sh stops it after
+# stop_timeout seconds and fails the check).
 set -u
 AGGLO=${AGGLO:?AGGLO must point to the built executable}
 . "$(cd "$(dirname "$0")" && pwd)/deck_error_lib.sh"
@@ -37,6 +38,11 @@ $fluid
 &output directory = 'nothing_here' /" '&run restart' 'no earlier run'
 expect_clean_stop pair_restart_without_run_on_2_ranks "&run name = 'p', restart = .true. /
 &scene fluid = 'none', particles = 'pair' /" '&run restart' 'no earlier run'
+mkdir -p no_checkpoint
+echo "&run name = 'old' /" > no_checkpoint/run.nml
+expect_clean_stop restart_without_checkpoint_on_2_ranks "&run name = 'a', restart = .true. /
+$fluid
+&output directory = 'no_checkpoint' /" '&run restart = .true.' 'holds no complete and valid checkpoint'
 touch not_a_directory
 expect_clean_stop output_not_creatable_on_2_ranks "&run name = 'a' /
 $fluid
