@@ -2,7 +2,9 @@
 !>  - An error every rank detects together (the deck checks: every rank parses the same text):
 !>    rank 0 prints the message, every rank finalizes MPI and exits with status 2. No MPI_Abort,
 !>    so the message is the last line the program prints (mpirun adds its own note on the
-!>    non-zero status unless started with `mpirun -q`).
+!>    non-zero status unless started with `mpirun -q`). A check only some ranks make (rank 0 looks at
+!>    a directory, each rank looks for a file) shares its answer first (parallel_env: all_ranks,
+!>    any_rank, root_text) so that a user's error still ends this way.
 !>  - An error only one rank detects: that rank prints it with its rank number and calls
 !>    MPI_Abort, which stops every rank (Open MPI then prints its abort banner).
 module error_handling
