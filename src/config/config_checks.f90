@@ -19,6 +19,7 @@ contains
     if (cfg%scene%fluid == 'resolved') call check_fluid_cross(cfg, nranks)
     if (cfg%scene%forcing /= 'none') call check_forcing_cross(cfg)
     if (cfg%scene%particles == 'pair') call check_particle_cross(cfg)
+    if (cfg%scene%particles == 'pair' .and. cfg%scene%fluid == 'resolved') call check_pair_in_box(cfg)
   end subroutine check_cross_groups
 
   !> Every variable of every group, whether the scene uses it or not, through the configuration's own
@@ -79,11 +80,10 @@ contains
         ''''//trim(cfg%scene%forcing)//''' with fluid = '''//trim(cfg%scene%fluid)//'''', '''none'' unless '// &
         'fluid = ''resolved'' (the forcing drives the resolved fluid; a fluid-free or Stokes scene has no '// &
         'velocity field)')
-    if (cfg%scene%fluid == 'resolved' .and. cfg%scene%particles == 'pair') call fatal( &
-        'deck: &scene fluid = ''resolved'' with particles = ''pair'' needs the immersed-boundary coupling '// &
-        'of freely moving particles, which this version does not have yet; use fluid = ''none'' or '// &
-        '''stokes'' for pair runs, or '// &
-        'particles = ''prescribed'' with &bodies for bodies in prescribed motion')
+    if (cfg%scene%fluid == 'resolved' .and. cfg%scene%particles == 'pair') call check_resolved_pair_cross(cfg)
+    if (cfg%pair%relative_to_fluid .and. cfg%scene%fluid /= 'resolved') call input_error('pair', &
+        'relative_to_fluid', '.true. with &scene fluid = '''//trim(cfg%scene%fluid)//'''', '.false. (only a '// &
+        'resolved fluid has a velocity at the particle centres)')
     if (cfg%scene%particles == 'prescribed') call check_prescribed_cross(cfg)
     if (cfg%scene%fluid /= 'resolved' .and. cfg%scene%particles == 'none') call input_error('scene', &
         'particles', '''none'' with fluid = '''//trim(cfg%scene%fluid)//'''', &
@@ -95,6 +95,31 @@ contains
         'particle_substeps', int_text(cfg%scene%particle_substeps)//' with fluid = '''//trim(cfg%scene%fluid)//'''', &
         '1 (sub-steps split a fluid step; without a resolved fluid set &run dt itself)')
   end subroutine check_scene_combinations
+
+  !> The pair in the resolved fluid: point particles only (the immersed-boundary coupling of freely
+  !> moving particles is not available yet).
+  subroutine check_resolved_pair_cross(cfg)
+    type(agglo_config_t), intent(in) :: cfg
+    if (cfg%scene%particle_coupling == 'resolved') call input_error('scene', 'particle_coupling', &
+        '''resolved'' with fluid = ''resolved'' and particles = ''pair''', '''point'' (the immersed-boundary '// &
+        'coupling of freely moving particles is not available yet; ''point'' gives each particle its analytic '// &
+        'Stokes resistance in the flow at its centre)')
+  end subroutine check_resolved_pair_cross
+
+  !> The pair in the resolved fluid's periodic box must not meet a periodic image of itself.
+  subroutine check_pair_in_box(cfg)
+    type(agglo_config_t), intent(in) :: cfg
+    real(wp) :: reach, smallest
+    ! The longest semi-axis is at most r max(a/b, b/a)**(2/3) (a b^2 = r^3, spheroid.f90).
+    reach = cfg%pair%radius
+    if (cfg%pair%shape /= 'sphere') &
+      reach = reach * max(cfg%pair%aspect_ratio, 1.0_wp / cfg%pair%aspect_ratio)**(2.0_wp / 3.0_wp)
+    smallest = min(cfg%grid%length_x, cfg%grid%length_y, cfg%grid%length_z)
+    if (.not. (4.0_wp * reach + cfg%pair%gap < 0.5_wp * smallest)) call input_error('pair', 'radius', &
+        real_text(cfg%pair%radius), 'a pair (4 times the longest semi-axis, '//real_text(4.0_wp * reach)// &
+        ' m, plus the gap) shorter than half the smallest box length ('//real_text(smallest)//' m), so that it '// &
+        'meets no periodic image of itself')
+  end subroutine check_pair_in_box
 
   !> Bodies in prescribed motion: resolved fluid, explicit diffusion, no Eswaran-Pope forcing.
   subroutine check_prescribed_cross(cfg)
