@@ -106,7 +106,7 @@ contains
         'Stokes resistance in the flow at its centre)')
   end subroutine check_resolved_pair_cross
 
-  !> The pair in the resolved fluid's periodic box must not meet a periodic image of itself.
+  !> The pair in the resolved fluid's periodic box: body 2's minimum image must be the one next to body 1.
   subroutine check_pair_in_box(cfg)
     type(agglo_config_t), intent(in) :: cfg
     real(wp) :: reach, smallest
@@ -115,10 +115,12 @@ contains
     if (cfg%pair%shape /= 'sphere') &
       reach = reach * max(cfg%pair%aspect_ratio, 1.0_wp / cfg%pair%aspect_ratio)**(2.0_wp / 3.0_wp)
     smallest = min(cfg%grid%length_x, cfg%grid%length_y, cfg%grid%length_z)
-    if (.not. (4.0_wp * reach + cfg%pair%gap < 0.5_wp * smallest)) call input_error('pair', 'radius', &
-        real_text(cfg%pair%radius), 'a pair (4 times the longest semi-axis, '//real_text(4.0_wp * reach)// &
-        ' m, plus the gap) shorter than half the smallest box length ('//real_text(smallest)//' m), so that it '// &
-        'meets no periodic image of itself')
+    ! The pair is handled as body 2's minimum image next to body 1: their centres, at most
+    ! 2 reach + gap apart while they interact, must stay within half a box length.
+    if (.not. (2.0_wp * reach + cfg%pair%gap < 0.5_wp * smallest)) call input_error('pair', 'radius', &
+        real_text(cfg%pair%radius), 'a pair whose centres, 2 x the longest semi-axis ('//real_text(reach)// &
+        ' m) plus the gap apart, are less than half the smallest box length ('//real_text(smallest)// &
+        ' m) apart (the minimum-image convention of the periodic box)')
   end subroutine check_pair_in_box
 
   !> Bodies in prescribed motion: resolved fluid, explicit diffusion, no Eswaran-Pope forcing.
