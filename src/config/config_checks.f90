@@ -81,6 +81,10 @@ contains
         'fluid = ''resolved'' (the forcing drives the resolved fluid; a fluid-free or Stokes scene has no '// &
         'velocity field)')
     if (cfg%scene%fluid == 'resolved' .and. cfg%scene%particles == 'pair') call check_resolved_pair_cross(cfg)
+    if (cfg%scene%added_mass .and. .not. (cfg%scene%fluid == 'resolved' .and. cfg%scene%particles == 'pair')) &
+      call input_error('scene', 'added_mass', '.true. with fluid = '''//trim(cfg%scene%fluid)//''' and particles = '''// &
+                       trim(cfg%scene%particles)//'''', '.false. (the added mass belongs to particle_coupling = ''point'' '// &
+                       'of the pair in the resolved fluid)')
     if (cfg%pair%relative_to_fluid .and. cfg%scene%fluid /= 'resolved') call input_error('pair', &
         'relative_to_fluid', '.true. with &scene fluid = '''//trim(cfg%scene%fluid)//'''', '.false. (only a '// &
         'resolved fluid has a velocity at the particle centres)')
@@ -232,10 +236,11 @@ contains
           '< 0.01 * &pair radius = '//real_text(0.01_wp * cfg%pair%radius)//' m')
       ! A start inside the detection distance max(floor, factor v_n dt) (collision.f90; v_n = the
       ! approach speed at the start) is a collision at the first step, whose outcome depends on dt.
-      detect = max(cfg%collision%detection_floor, cfg%collision%detection_factor * cfg%pair%relative_speed * cfg%run%dt)
+      detect = max(cfg%collision%detection_floor, cfg%collision%detection_factor * cfg%pair%relative_speed * cfg%run%dt &
+                                                  / cfg%scene%particle_substeps)   ! the particle step
       if (.not. (cfg%pair%gap > detect)) call input_error('pair', 'gap', real_text(cfg%pair%gap), '> '// &
           real_text(detect)//' m, the collision detection distance at the start, max(&collision '// &
-          'detection_floor, detection_factor * relative_speed * &run dt)')
+          'detection_floor, detection_factor * relative_speed * &run dt / &scene particle_substeps)')
     end if
   end subroutine check_particle_cross
 end module config_checks

@@ -110,6 +110,7 @@ contains
       ! The collision test comes first, on the current state (as in the pair scenes).
       call particle_system_interact(system, cfg%run%dt / substeps)
     end if
+    call hydrodynamics%prepare(solver, system)
     call flow_output_start(flow, cfg, solver)
     viscous_limit = huge(1.0_wp)
     if (.not. solver%crank_nicolson) viscous_limit = explicit_viscous_limit(solver%grid%dx, solver%grid%dy, &
@@ -252,7 +253,6 @@ contains
       call fatal('resolved pair scene: &scene particle_coupling = '''//trim(cfg%scene%particle_coupling)// &
                  ''' is not available yet')
     end select
-    call hydrodynamics%prepare(solver, system)
   end subroutine create_hydrodynamics
 
   !> &pair relative_to_fluid: each body's start velocity on top of the fluid velocity at its centre,
