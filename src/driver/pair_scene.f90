@@ -11,6 +11,8 @@
 !> (group particles, module particle_system_checkpoint) and the loop's own state (group pair_scene);
 !> each is written after its step's events, sample and end test, so &run restart = .true. restores
 !> both and goes on with the next particle step, bit for bit (docs/outputs.md, Checkpoints).
+!> The pair's bookkeeping (system set-up, collision events, samples, end test, summary, checkpoint
+!> group) is public: the pair in the resolved fluid (module resolved_pair_scene) keeps it the same way.
 module pair_scene
   use agglo_kinds, only: wp, i8
   use agglo_config, only: agglo_config_t
