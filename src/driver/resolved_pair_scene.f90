@@ -34,8 +34,6 @@ module resolved_pair_scene
   use fluid_solver, only: fluid_solver_t
   use fluid_diagnostics, only: fluid_statistics_t, compute_fluid_statistics, advective_rate
   use time_step_control, only: next_time_step, explicit_viscous_limit
-  use field_interpolation, only: on_x_faces, on_y_faces, on_z_faces, interpolate_at_points, &
-                                 velocity_gradient_at_points
   use fluid_restart, only: write_fluid_checkpoint, write_fluid_snapshot
   use fluid_monitor, only: statistics_open, statistics_write, statistics_close, progress_line, timing_report
   use forcing_driver, only: forcing_driver_t, forcing_driver_start, forcing_driver_power_input, &
@@ -54,7 +52,7 @@ module resolved_pair_scene
                         open_particle_output
   use pair_hydrodynamics, only: pair_hydrodynamics_t
   use point_hydrodynamics, only: point_hydrodynamics_t, point_hydrodynamics_create
-  use point_particle_coupling, only: local_rotation
+  use point_particle_coupling, only: local_rotation, sample_velocity
   implicit none
   private
   public :: run_resolved_pair_scene
@@ -266,10 +264,7 @@ contains
     do i = 1, system%n
       centres(:, i) = system%bodies(i)%position
     end do
-    call interpolate_at_points(solver%grid, solver%u, on_x_faces, centres, velocity(1, :))
-    call interpolate_at_points(solver%grid, solver%v, on_y_faces, centres, velocity(2, :))
-    call interpolate_at_points(solver%grid, solver%w, on_z_faces, centres, velocity(3, :))
-    call velocity_gradient_at_points(solver%grid, solver%u, solver%v, solver%w, centres, gradient)
+    call sample_velocity(solver%grid, solver%u, solver%v, solver%w, centres, velocity, gradient)
     do i = 1, system%n
       system%bodies(i)%velocity = system%bodies(i)%velocity + velocity(:, i)
       call set_angular_velocity_lab(system%bodies(i), local_rotation(gradient(:, :, i)))
