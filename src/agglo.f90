@@ -16,6 +16,7 @@ program agglo
   use hdf5_io, only: hdf5_io_finalize
   use resolved_scene, only: run_resolved_scene
   use pair_scene, only: run_pair_scene
+  use resolved_pair_scene, only: run_resolved_pair_scene
   implicit none
   character(len=*), parameter :: usage = 'usage: agglo DECK.nml [--set group.variable=value]... [--print-deck]'// &
       '   (run with mpirun -np N for N ranks; docs/decks.md)'
@@ -44,7 +45,11 @@ program agglo
 
   select case (trim(cfg%scene%fluid))
   case ('resolved')
-    call run_resolved_scene(cfg)
+    if (cfg%scene%particles == 'pair') then
+      call run_resolved_pair_scene(cfg)
+    else
+      call run_resolved_scene(cfg)
+    end if
   case default
     call run_pair_scene(cfg)
   end select

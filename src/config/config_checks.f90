@@ -19,6 +19,7 @@ contains
     if (cfg%scene%fluid == 'resolved') call check_fluid_cross(cfg, nranks)
     if (cfg%scene%forcing /= 'none') call check_forcing_cross(cfg)
     if (cfg%scene%particles == 'pair') call check_particle_cross(cfg)
+    if (cfg%scene%particles == 'pair' .and. cfg%scene%fluid == 'resolved') call check_pair_in_box(cfg)
   end subroutine check_cross_groups
 
   !> Every variable of every group, whether the scene uses it or not, through the configuration's own
@@ -79,11 +80,14 @@ contains
         ''''//trim(cfg%scene%forcing)//''' with fluid = '''//trim(cfg%scene%fluid)//'''', '''none'' unless '// &
         'fluid = ''resolved'' (the forcing drives the resolved fluid; a fluid-free or Stokes scene has no '// &
         'velocity field)')
-    if (cfg%scene%fluid == 'resolved' .and. cfg%scene%particles == 'pair') call fatal( &
-        'deck: &scene fluid = ''resolved'' with particles = ''pair'' needs the immersed-boundary coupling '// &
-        'of freely moving particles, which this version does not have yet; use fluid = ''none'' or '// &
-        '''stokes'' for pair runs, or '// &
-        'particles = ''prescribed'' with &bodies for bodies in prescribed motion')
+    if (cfg%scene%fluid == 'resolved' .and. cfg%scene%particles == 'pair') call check_resolved_pair_cross(cfg)
+    if (cfg%scene%added_mass .and. .not. (cfg%scene%fluid == 'resolved' .and. cfg%scene%particles == 'pair')) &
+      call input_error('scene', 'added_mass', '.true. with fluid = '''//trim(cfg%scene%fluid)//''' and particles = '''// &
+                       trim(cfg%scene%particles)//'''', '.false. (the added mass belongs to particle_coupling = ''point'' '// &
+                       'of the pair in the resolved fluid)')
+    if (cfg%pair%relative_to_fluid .and. cfg%scene%fluid /= 'resolved') call input_error('pair', &
+        'relative_to_fluid', '.true. with &scene fluid = '''//trim(cfg%scene%fluid)//'''', '.false. (only a '// &
+        'resolved fluid has a velocity at the particle centres)')
     if (cfg%scene%particles == 'prescribed') call check_prescribed_cross(cfg)
     if (cfg%scene%fluid /= 'resolved' .and. cfg%scene%particles == 'none') call input_error('scene', &
         'particles', '''none'' with fluid = '''//trim(cfg%scene%fluid)//'''', &
@@ -95,6 +99,33 @@ contains
         'particle_substeps', int_text(cfg%scene%particle_substeps)//' with fluid = '''//trim(cfg%scene%fluid)//'''', &
         '1 (sub-steps split a fluid step; without a resolved fluid set &run dt itself)')
   end subroutine check_scene_combinations
+
+  !> The pair in the resolved fluid: point particles only (the immersed-boundary coupling of freely
+  !> moving particles is not available yet).
+  subroutine check_resolved_pair_cross(cfg)
+    type(agglo_config_t), intent(in) :: cfg
+    if (cfg%scene%particle_coupling == 'resolved') call input_error('scene', 'particle_coupling', &
+        '''resolved'' with fluid = ''resolved'' and particles = ''pair''', '''point'' (the immersed-boundary '// &
+        'coupling of freely moving particles is not available yet; ''point'' gives each particle its analytic '// &
+        'Stokes resistance in the flow at its centre)')
+  end subroutine check_resolved_pair_cross
+
+  !> The pair in the resolved fluid's periodic box: body 2's minimum image must be the one next to body 1.
+  subroutine check_pair_in_box(cfg)
+    type(agglo_config_t), intent(in) :: cfg
+    real(wp) :: reach, smallest
+    ! The longest semi-axis is at most r max(a/b, b/a)**(2/3) (a b^2 = r^3, spheroid.f90).
+    reach = cfg%pair%radius
+    if (cfg%pair%shape /= 'sphere') &
+      reach = reach * max(cfg%pair%aspect_ratio, 1.0_wp / cfg%pair%aspect_ratio)**(2.0_wp / 3.0_wp)
+    smallest = min(cfg%grid%length_x, cfg%grid%length_y, cfg%grid%length_z)
+    ! The pair is handled as body 2's minimum image next to body 1: their centres, at most
+    ! 2 reach + gap apart while they interact, must stay within half a box length.
+    if (.not. (2.0_wp * reach + cfg%pair%gap < 0.5_wp * smallest)) call input_error('pair', 'radius', &
+        real_text(cfg%pair%radius), 'a pair whose centres, 2 x the longest semi-axis ('//real_text(reach)// &
+        ' m) plus the gap apart, are less than half the smallest box length ('//real_text(smallest)// &
+        ' m) apart (the minimum-image convention of the periodic box)')
+  end subroutine check_pair_in_box
 
   !> Bodies in prescribed motion: resolved fluid, explicit diffusion, no Eswaran-Pope forcing.
   subroutine check_prescribed_cross(cfg)
@@ -205,10 +236,11 @@ contains
           '< 0.01 * &pair radius = '//real_text(0.01_wp * cfg%pair%radius)//' m')
       ! A start inside the detection distance max(floor, factor v_n dt) (collision.f90; v_n = the
       ! approach speed at the start) is a collision at the first step, whose outcome depends on dt.
-      detect = max(cfg%collision%detection_floor, cfg%collision%detection_factor * cfg%pair%relative_speed * cfg%run%dt)
+      detect = max(cfg%collision%detection_floor, cfg%collision%detection_factor * cfg%pair%relative_speed * cfg%run%dt &
+                                                  / cfg%scene%particle_substeps)   ! the particle step
       if (.not. (cfg%pair%gap > detect)) call input_error('pair', 'gap', real_text(cfg%pair%gap), '> '// &
           real_text(detect)//' m, the collision detection distance at the start, max(&collision '// &
-          'detection_floor, detection_factor * relative_speed * &run dt)')
+          'detection_floor, detection_factor * relative_speed * &run dt / &scene particle_substeps)')
     end if
   end subroutine check_particle_cross
 end module config_checks

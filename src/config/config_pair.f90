@@ -31,15 +31,18 @@ module config_pair
     logical :: mirror_first_collision = .true.    !< end at twice the first-collision time (paper)
     character(len=16) :: end_rule = 'settled'     !< 'settled': past that end until the outcome is settled | 'paper'
     character(len=16) :: integrator = 'euler'     !< rigid-body update: 'euler' (paper) | 'verlet' (2nd order)
+    !> Resolved fluid: the start velocities on top of the fluid's at each centre (and the angular
+    !> velocity its local (1/2) curl u); centre = 'random' draws in the fluid's box (box_length unused)
+    logical :: relative_to_fluid = .false.
   end type pair_config_t
 
   character(len=16) :: shape, orientation, approach, centre, integrator, end_rule
   real(wp) :: aspect_ratio, radius, density, axis1(3), angle1, axis2(3), angle2, approach_direction(3), &
               gap, relative_speed, centre_position(3), box_length
-  logical :: mirror_first_collision
+  logical :: mirror_first_collision, relative_to_fluid
   namelist /pair/ shape, aspect_ratio, radius, density, orientation, axis1, angle1, axis2, angle2, approach, &
                   approach_direction, gap, relative_speed, centre, centre_position, box_length, mirror_first_collision, &
-                  integrator, end_rule
+                  integrator, end_rule, relative_to_fluid
 
 contains
 
@@ -51,6 +54,7 @@ contains
     gap = cfg%gap; relative_speed = cfg%relative_speed; centre = cfg%centre
     centre_position = cfg%centre_position; box_length = cfg%box_length
     mirror_first_collision = cfg%mirror_first_collision; integrator = cfg%integrator; end_rule = cfg%end_rule
+    relative_to_fluid = cfg%relative_to_fluid
   end subroutine to_namelist
 
   subroutine from_namelist(cfg)
@@ -61,6 +65,7 @@ contains
     cfg%gap = gap; cfg%relative_speed = relative_speed; cfg%centre = centre
     cfg%centre_position = centre_position; cfg%box_length = box_length
     cfg%mirror_first_collision = mirror_first_collision; cfg%integrator = integrator; cfg%end_rule = end_rule
+    cfg%relative_to_fluid = relative_to_fluid
   end subroutine from_namelist
 
   subroutine read_pair_group(deck, cfg)

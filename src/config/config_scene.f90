@@ -14,12 +14,17 @@ module config_scene
     logical :: dlvo = .true.                      !< DLVO forces between the particles
     logical :: collisions = .true.                !< hard-body collisions between the particles
     integer :: particle_substeps = 1              !< particle steps per fluid step (frozen loads)
+    !> How the pair in the resolved fluid feels it: 'point' (analytic Stokes resistance in the flow at
+    !> each centre, the fluid solved without the bodies) | 'resolved' (immersed boundary; not yet)
+    character(len=16) :: particle_coupling = 'resolved'
+    logical :: added_mass = .false.               !< particle_coupling = 'point': implicit added-mass term
   end type scene_config_t
 
-  character(len=16) :: fluid, particles, forcing, ibm_coupling
-  logical :: dlvo, collisions
+  character(len=16) :: fluid, particles, forcing, ibm_coupling, particle_coupling
+  logical :: dlvo, collisions, added_mass
   integer :: particle_substeps
-  namelist /scene/ fluid, particles, forcing, ibm_coupling, dlvo, collisions, particle_substeps
+  namelist /scene/ fluid, particles, forcing, ibm_coupling, dlvo, collisions, particle_substeps, particle_coupling, &
+                   added_mass
 
 contains
 
@@ -27,12 +32,14 @@ contains
     type(scene_config_t), intent(in) :: cfg
     fluid = cfg%fluid; particles = cfg%particles; forcing = cfg%forcing; ibm_coupling = cfg%ibm_coupling
     dlvo = cfg%dlvo; collisions = cfg%collisions; particle_substeps = cfg%particle_substeps
+    particle_coupling = cfg%particle_coupling; added_mass = cfg%added_mass
   end subroutine to_namelist
 
   subroutine from_namelist(cfg)
     type(scene_config_t), intent(inout) :: cfg
     cfg%fluid = fluid; cfg%particles = particles; cfg%forcing = forcing; cfg%ibm_coupling = ibm_coupling
     cfg%dlvo = dlvo; cfg%collisions = collisions; cfg%particle_substeps = particle_substeps
+    cfg%particle_coupling = particle_coupling; cfg%added_mass = added_mass
   end subroutine from_namelist
 
   subroutine read_scene_group(deck, cfg)
@@ -53,6 +60,7 @@ contains
     call require_option('scene', 'forcing', cfg%forcing, [character(len=12) :: 'none', 'eswaran_pope'])
     call require_option('scene', 'ibm_coupling', cfg%ibm_coupling, [character(len=8) :: 'implicit', 'explicit'])
     call require_positive_int('scene', 'particle_substeps', cfg%particle_substeps)
+    call require_option('scene', 'particle_coupling', cfg%particle_coupling, [character(len=8) :: 'point', 'resolved'])
   end subroutine check_scene_group
 
   subroutine write_scene_group(unit, cfg)

@@ -11,6 +11,8 @@
 !> (group particles, module particle_system_checkpoint) and the loop's own state (group pair_scene);
 !> each is written after its step's events, sample and end test, so &run restart = .true. restores
 !> both and goes on with the next particle step, bit for bit (docs/outputs.md, Checkpoints).
+!> The pair's bookkeeping (system set-up, collision events, samples, end test, summary, checkpoint
+!> group) is public: the pair in the resolved fluid (module resolved_pair_scene) keeps it the same way.
 module pair_scene
   use agglo_kinds, only: wp, i8
   use agglo_config, only: agglo_config_t
@@ -40,6 +42,9 @@ module pair_scene
   implicit none
   private
   public :: run_pair_scene
+  ! Shared with the pair in the resolved fluid (module resolved_pair_scene): the pair's bookkeeping.
+  public :: pair_loop_t, setup_system, record_interaction, run_finished, sampled, write_sample, finish_summary, &
+            log_pair, write_pair_scene_group, read_pair_scene_group, normal_approach_speed, open_particle_output
 
   !> The pair's only pair in the system's pair list.
   integer, parameter :: the_pair = 1
@@ -85,9 +90,7 @@ contains
     if (resumed) then
       call restore_pair_scene(cfg, system, loop, summary, hydrodynamic, output)
     else
-      call particle_output_open(output, run_file('particles.h5'), pair_run_metadata_t(name=cfg%run%name, &
-          shape=cfg%pair%shape, aspect_ratio=pair%shape%aspect_ratio, radius=cfg%pair%radius, fluid=cfg%scene%fluid, &
-          seed=int(cfg%run%seed, i8), bodies=system%n))
+      call open_particle_output(cfg, pair, system, output)
       ! The collision test comes first, on the current state: with a detection distance of
       ! v_n dt the pair is caught before a step could carry it into overlap.
       call particle_system_interact(system, dt)
@@ -146,13 +149,27 @@ contains
     type(particle_output_t), intent(inout) :: output
     logical, intent(in) :: last          !< the finished run's last state
     type(checkpoint_t) :: transaction
+    call checkpoint_begin(transaction, loop%step)
+    call write_pair_scene_group(transaction, cfg, system, loop, summary, hydrodynamic, output, last)
+    call checkpoint_commit(transaction, cfg%output%checkpoints_kept)
+  end subroutine checkpoint_pair_scene
+
+  !> The particle system's group and the scene's own (group pair_scene) of an open checkpoint.
+  subroutine write_pair_scene_group(transaction, cfg, system, loop, summary, hydrodynamic, output, last)
+    type(checkpoint_t), intent(in) :: transaction
+    type(agglo_config_t), intent(in) :: cfg
+    type(particle_system_t), intent(in) :: system
+    type(pair_loop_t), intent(in) :: loop
+    type(run_summary_t), intent(in) :: summary
+    type(particle_loads_t), intent(in) :: hydrodynamic
+    type(particle_output_t), intent(inout) :: output
+    logical, intent(in) :: last          !< the finished run's last state
     integer(i8) :: rows(2)
     call particle_output_flush(output)
     call particle_output_rows(output, rows(1), rows(2))
     ! The sample a finished run adds at its last step is not kept: a continued run that goes on does
     ! not have it, one that ends there writes it again.
     if (last .and. .not. sampled(cfg, loop%step)) rows(1) = rows(1) - 1_i8
-    call checkpoint_begin(transaction, loop%step)
     call write_particle_system_checkpoint(transaction, system)
     associate (file => transaction%file, first => summary%first_collision)
       call h5_write_array(file, 'pair_scene/time', loop%time)
@@ -167,8 +184,7 @@ contains
       call h5_write_array(file, 'pair_scene/hydrodynamic_torque', hydrodynamic%torque)
       call h5_write_array(file, 'pair_scene/output_rows', rows)
     end associate
-    call checkpoint_commit(transaction, cfg%output%checkpoints_kept)
-  end subroutine checkpoint_pair_scene
+  end subroutine write_pair_scene_group
 
   !> &run restart: the newest valid checkpoint restores the particle system and the scene's loop
   !> (the system is current: no new interaction), and particles.h5 continues from its rows.
@@ -180,11 +196,25 @@ contains
     type(particle_loads_t), intent(inout) :: hydrodynamic
     type(particle_output_t), intent(out) :: output
     type(checkpoint_t) :: restart
+    call checkpoint_open_newest(restart)
+    call read_pair_scene_group(restart, cfg, system, loop, summary, hydrodynamic, output)
+    call checkpoint_close(restart)
+  end subroutine restore_pair_scene
+
+  !> From an open checkpoint: the particle system, the scene's loop, and particles.h5 continued
+  !> from the checkpoint's rows.
+  subroutine read_pair_scene_group(restart, cfg, system, loop, summary, hydrodynamic, output)
+    type(checkpoint_t), intent(in) :: restart
+    type(agglo_config_t), intent(in) :: cfg
+    type(particle_system_t), intent(inout) :: system
+    type(pair_loop_t), intent(inout) :: loop
+    type(run_summary_t), intent(inout) :: summary
+    type(particle_loads_t), intent(inout) :: hydrodynamic
+    type(particle_output_t), intent(out) :: output
     real(wp), allocatable :: first(:), force(:,:), torque(:,:)
     integer(i8), allocatable :: rows(:)
     integer, allocatable :: bodies(:)
     integer :: flag
-    call checkpoint_open_newest(restart)
     if (.not. h5_exists(restart%file, 'pair_scene/step')) call fatal('checkpoint '//restart%path// &
         ' holds no pair scene (group pair_scene): &run restart must continue a run of the same scene')
     call read_particle_system_checkpoint(restart, system)
@@ -214,9 +244,28 @@ contains
     if (summary%has_first_collision .and. cfg%pair%mirror_first_collision) &
       loop%end_time = min(loop%end_time, 2.0_wp * summary%first_collision%time)
     call log_line('pair scene: continuing from '//restart%path)
-    call checkpoint_close(restart)
     call particle_output_continue(output, run_file('particles.h5'), system%n, rows(1), rows(2))
-  end subroutine restore_pair_scene
+  end subroutine read_pair_scene_group
+
+  !> A new particles.h5 in the run directory.
+  subroutine open_particle_output(cfg, pair, system, output)
+    type(agglo_config_t), intent(in) :: cfg
+    type(pair_t), intent(in) :: pair
+    type(particle_system_t), intent(in) :: system
+    type(particle_output_t), intent(out) :: output
+    call particle_output_open(output, run_file('particles.h5'), pair_run_metadata_t(name=cfg%run%name, &
+        shape=cfg%pair%shape, aspect_ratio=pair%shape%aspect_ratio, radius=cfg%pair%radius, fluid=fluid_name(cfg), &
+        seed=int(cfg%run%seed, i8), bodies=system%n))
+  end subroutine open_particle_output
+
+  !> The fluid model of the outputs (particles.h5, summary.json): &scene fluid, and the coupling
+  !> with a resolved fluid ('resolved_point'), so that batches of either are told apart.
+  function fluid_name(cfg) result(name)
+    type(agglo_config_t), intent(in) :: cfg
+    character(len=:), allocatable :: name
+    name = trim(cfg%scene%fluid)
+    if (name == 'resolved') name = name//'_'//trim(cfg%scene%particle_coupling)
+  end function fluid_name
 
   !> Is step one of the &output stats_interval samples?
   logical function sampled(cfg, step)
@@ -225,12 +274,14 @@ contains
     sampled = mod(step, int(cfg%output%stats_interval, i8)) == 0
   end function sampled
 
-  !> The two bodies of the placed pair, their models, no box (the pair scenes are unbounded), and
+  !> The two bodies of the placed pair, their models, no box (the pair scenes are unbounded; the
+  !> resolved pair scene passes the fluid's periodic box), and
   !> the placement's closest points as the current contact.
-  subroutine setup_system(cfg, pair, system)
+  subroutine setup_system(cfg, pair, system, box_length)
     type(agglo_config_t), intent(in) :: cfg
     type(pair_t), intent(in) :: pair
     type(particle_system_t), intent(out) :: system
+    real(wp), intent(in), optional :: box_length(3)   !< m, periodic box (the resolved fluid's); absent: unbounded
     type(particle_models_t) :: models
     models%dlvo = cfg%scene%dlvo
     models%collisions = cfg%scene%collisions
@@ -243,7 +294,8 @@ contains
       call collision_setup(models%collision_model, cfg%collision)
       call collision_log_settings(models%collision_model)
     end if
-    call particle_system_create(system, [pair%shape, pair%shape], pair%body, models, contacts=[pair%contact])
+    call particle_system_create(system, [pair%shape, pair%shape], pair%body, models, box_length=box_length, &
+                                contacts=[pair%contact])
   end subroutine setup_system
 
   !> Stokes drag and torque of each body at its current velocities (lab frame).
@@ -383,7 +435,7 @@ contains
     summary%seed = int(cfg%run%seed, i8)
     summary%shape = cfg%pair%shape
     summary%aspect_ratio = system%shapes(1)%aspect_ratio
-    summary%fluid = cfg%scene%fluid
+    summary%fluid = fluid_name(cfg)
     summary%max_vdw_force = loop%max_vdw_force
     summary%final_gap = system%pairs(the_pair)%contact%gap
     summary%final_relative_velocity = normal_approach_speed(system, the_pair)

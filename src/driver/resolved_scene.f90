@@ -31,6 +31,7 @@ module resolved_scene
   implicit none
   private
   public :: run_resolved_scene
+  public :: start_fluid, next_output_time   ! shared with the pair in the resolved fluid (resolved_pair_scene)
 
 contains
 

@@ -41,7 +41,7 @@ module particle_output
     character(len=16) :: shape = ''         !< 'sphere' | 'needle' | 'disk' | 'spheroid'
     real(wp) :: aspect_ratio = 1.0_wp       !< a/b of the spheroids
     real(wp) :: radius = 0.0_wp             !< m, volume-equivalent radius
-    character(len=16) :: fluid = ''         !< 'none' | 'stokes'
+    character(len=16) :: fluid = ''         !< 'none' | 'stokes' | 'resolved_point'
     integer(i8) :: seed = 0_i8              !< &run seed
     integer :: bodies = 2                   !< number of bodies; > 2 adds /bodies and the events' body columns
   end type pair_run_metadata_t

@@ -28,10 +28,13 @@ module pair_setup
 contains
 
   !> Build the pair from &pair and the run seed. The gap is exact to 1e-12 of the radius.
-  subroutine build_pair(cfg, seed, pair)
+  !> box: the periodic box of a resolved fluid (m), where centre = 'random' draws the centre
+  !> (absent: the cube of &pair box_length).
+  subroutine build_pair(cfg, seed, pair, box)
     type(pair_config_t), intent(in) :: cfg
     integer, intent(in) :: seed
     type(pair_t), intent(out) :: pair
+    real(wp), intent(in), optional :: box(3)
     type(random_stream_t) :: stream
     real(wp) :: orientation(4, 2), direction(3), centre(3), reach, shift, normal(3)
     integer :: i, iteration
@@ -58,7 +61,12 @@ contains
     end if
     direction = direction / norm2(direction)
     if (cfg%centre == 'random') then
-      centre = cfg%box_length * [stream_uniform(stream), stream_uniform(stream), stream_uniform(stream)]
+      centre = [stream_uniform(stream), stream_uniform(stream), stream_uniform(stream)]
+      if (present(box)) then
+        centre = box * centre
+      else
+        centre = cfg%box_length * centre
+      end if
     else
       centre = cfg%centre_position
     end if

@@ -26,7 +26,7 @@ module stokes_resistance
   implicit none
   private
   public :: stokes_resistance_t, stokes_resistance_setup, spheroid_resistance_coefficients, stokes_loads_lab, &
-            stokes_loads, stokes_resistance_of
+            stokes_loads, stokes_resistance_of, spheroid_added_mass_coefficients
 
   !> Drag of a rigid_body_t, or of explicit velocities and a rotation matrix.
   interface stokes_loads
@@ -57,6 +57,19 @@ contains
     coefficients(3) = 16.0_wp * pi / (3.0_wp * alpha2) / (8.0_wp * pi * r**3)
     coefficients(4) = 16.0_wp * pi * (a * a + b * b) / (3.0_wp * (a * a * alpha1 + b * b * alpha2)) / (8.0_wp * pi * r**3)
   end function spheroid_resistance_coefficients
+
+  !> Translational added-mass coefficients [k_axial, k_transverse] of a spheroid: the added mass
+  !> along body axis i is k_i rho_f V. Potential flow (Lamb, "Hydrodynamics" (1932) sec. 373):
+  !> k_i = alpha0_i / (2 - alpha0_i) with alpha0_i = a b^2 alpha_i, the same ellipsoid integrals as
+  !> the Stokes resistance (sum_i alpha0_i = 2; a sphere has alpha0_i = 2/3, k = 1/2).
+  pure function spheroid_added_mass_coefficients(axial_semi_axis, transverse_semi_axis) result(coefficients)
+    real(wp), intent(in) :: axial_semi_axis, transverse_semi_axis
+    real(wp) :: coefficients(2)
+    real(wp) :: chi, alpha1, alpha2, alpha0(2)
+    call ellipsoid_integrals(axial_semi_axis, transverse_semi_axis, chi, alpha1, alpha2)
+    alpha0 = axial_semi_axis * transverse_semi_axis**2 * [alpha1, alpha2]
+    coefficients = alpha0 / (2.0_wp - alpha0)
+  end function spheroid_added_mass_coefficients
 
   !> chi, alpha_1 (axial) and alpha_2 = alpha_3 (transverse) of a spheroid.
   pure subroutine ellipsoid_integrals(a, b, chi, alpha1, alpha2)

@@ -72,7 +72,19 @@ expect_error pair_scene_cfl 1 "&run name = 'p', dt_mode = 'cfl' /
 expect_error pair_without_particles 1 "&run name = 'p' /
 &scene fluid = 'stokes' /" '&scene particles' "'pair'"
 expect_error resolved_with_pair 1 "&run name = 'p' /
-&scene fluid = 'resolved', particles = 'pair' /" 'immersed-boundary coupling'
+&scene fluid = 'resolved', particles = 'pair' /" "&scene particle_coupling = 'resolved'" 'not available yet'
+expect_error resolved_pair_unknown_coupling 1 "&run name = 'p' /
+&scene fluid = 'resolved', particles = 'pair', particle_coupling = 'lagrange' /
+&grid nx = 8, ny = 8, nz = 8 /" "&scene particle_coupling = 'lagrange'" "'point' | 'resolved'"
+expect_error relative_to_fluid_without_fluid 1 "&run name = 'p' /
+&scene fluid = 'stokes', particles = 'pair' /
+&pair relative_to_fluid = .true. /" '&pair relative_to_fluid' 'only a resolved fluid'
+expect_error added_mass_in_stokes_scene 1 "&run name = 'p' /
+&scene fluid = 'stokes', particles = 'pair', added_mass = .true. /" '&scene added_mass' 'particle_coupling'
+expect_error point_pair_larger_than_box 1 "&run name = 'p' /
+&scene fluid = 'resolved', particles = 'pair', particle_coupling = 'point' /
+&grid nx = 8, ny = 8, nz = 8, length_x = 4.0e-4, length_y = 4.0e-4, length_z = 4.0e-4 /
+&pair shape = 'needle', aspect_ratio = 5.0, radius = 50.0e-6 /" '&pair radius' 'half the smallest box length'
 expect_error pair_scene_restart_without_run 1 "&run name = 'p', restart = .true. /
 &scene fluid = 'none', particles = 'pair' /" '&run restart' 'no earlier run'
 expect_error pair_scene_substeps 1 "&run name = 'p' /

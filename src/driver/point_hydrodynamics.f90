@@ -1,0 +1,71 @@
+!> &scene particle_coupling = 'point': the hydrodynamic-load provider of the resolved pair scene
+!> for point particles (module pair_hydrodynamics; the physics in coupling/point_particle_coupling).
+!> The fluid step is the particle-free one (forced_fluid_advance: the same fused step as the
+!> resolved scene without bodies); the fluid is sampled at the bodies' centres before and after it,
+!> and the sub-steps read it interpolated linearly in time between u^n and u^n+1.
+module point_hydrodynamics
+  use agglo_kinds, only: wp
+  use fluid_solver, only: fluid_solver_t
+  use forcing_driver, only: forcing_driver_t, forced_fluid_advance
+  use particle_system, only: particle_system_t, particle_loads_t
+  use point_particle_coupling, only: point_coupling_t, point_fluid_t, point_coupling_create, point_coupling_sample, &
+                                     point_fluid_at, point_body_loads, sample_start, sample_end
+  use pair_hydrodynamics, only: pair_hydrodynamics_t
+  implicit none
+  private
+  public :: point_hydrodynamics_t, point_hydrodynamics_create
+
+  type, extends(pair_hydrodynamics_t) :: point_hydrodynamics_t
+    type(point_coupling_t) :: coupling
+  contains
+    procedure :: prepare => point_prepare
+    procedure :: fluid_step => point_fluid_step
+    procedure :: loads => point_loads
+  end type point_hydrodynamics_t
+
+contains
+
+  !> The provider for the system's bodies in the solver's fluid; added_mass: the implicit
+  !> added-mass term (&scene added_mass).
+  subroutine point_hydrodynamics_create(provider, solver, system, added_mass)
+    type(point_hydrodynamics_t), intent(out) :: provider
+    type(fluid_solver_t), intent(in) :: solver
+    type(particle_system_t), intent(in) :: system
+    logical, intent(in) :: added_mass
+    call point_coupling_create(provider%coupling, system%shapes, solver%density, solver%density * solver%viscosity, &
+                               [solver%grid%lx, solver%grid%ly, solver%grid%lz], added_mass)
+  end subroutine point_hydrodynamics_create
+
+  !> The fluid at the current centres, frozen until the first fluid step.
+  subroutine point_prepare(self, solver, system)
+    class(point_hydrodynamics_t), intent(inout) :: self
+    type(fluid_solver_t), intent(in) :: solver
+    type(particle_system_t), intent(in) :: system
+    call point_coupling_sample(self%coupling, solver%grid, solver%u, solver%v, solver%w, system%bodies, sample_start)
+  end subroutine point_prepare
+
+  subroutine point_fluid_step(self, solver, forcing, system, dt)
+    class(point_hydrodynamics_t), intent(inout) :: self
+    type(fluid_solver_t), intent(inout) :: solver
+    type(forcing_driver_t), intent(inout) :: forcing
+    type(particle_system_t), intent(in) :: system
+    real(wp), intent(in) :: dt
+    call point_coupling_sample(self%coupling, solver%grid, solver%u, solver%v, solver%w, system%bodies, sample_start)
+    call forced_fluid_advance(forcing, solver, dt)
+    call point_coupling_sample(self%coupling, solver%grid, solver%u, solver%v, solver%w, system%bodies, sample_end, dt)
+  end subroutine point_fluid_step
+
+  subroutine point_loads(self, system, theta, loads)
+    class(point_hydrodynamics_t), intent(in) :: self
+    type(particle_system_t), intent(in) :: system
+    real(wp), intent(in) :: theta
+    type(particle_loads_t), intent(inout) :: loads
+    type(point_fluid_t) :: fluid
+    integer :: i
+    do i = 1, system%n
+      fluid = point_fluid_at(self%coupling, i, system%bodies(i)%position, theta)
+      call point_body_loads(self%coupling, i, system%bodies(i), fluid, system%dlvo_loads%force(:, i), &
+                            loads%force(:, i), loads%torque(:, i))
+    end do
+  end subroutine point_loads
+end module point_hydrodynamics
