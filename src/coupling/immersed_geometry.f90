@@ -410,7 +410,10 @@ contains
 
     box = [grid%lx, grid%ly, grid%lz]
     spacing = [grid%dx, grid%dy, grid%dz]
-    body = bodies(ghost%body)
+    ! The pose only: a copy of the whole body would copy its mesh for every ghost node.
+    body%shape = bodies(ghost%body)%shape
+    body%centre = bodies(ghost%body)%centre
+    body%orientation = bodies(ghost%body)%orientation
     ghost%position = node_position(grid, component, ghost%node(1), ghost%node(2), ghost%node(3))
     ! The image of the body's centre nearest to G: everything below is in G's image frame.
     centre = ghost%position - minimum_image(ghost%position - body%centre, box)
