@@ -39,7 +39,7 @@ module sphere_array_case
     real(wp) :: ghost_tolerance = 1.0e-12_wp
     logical :: rotating = .false.                !< rotating sphere, no drive, steady torque
     integer :: mesh_level = -1                   !< ghost nodes see the icosphere of this level ('mesh'); -1 analytic
-    integer :: surface_level = 2                 !< icosphere level of the face-sum loads
+    integer :: surface_level = -1                !< icosphere level of the face-sum loads; -1 none (momentum only)
   end type sphere_array_case_t
 
   type :: sphere_array_result_t

@@ -24,6 +24,7 @@ program test_immersed_surface_loads
   call parallel_start()
   call test_start('immersed_surface_loads')
   case%cells = 13
+  case%surface_level = 2
   call run_sphere_array(case, analytic)
   difference = analytic%surface_force(1) / analytic%force(1) - 1
   print '(a,f7.4,a,f7.2,a)', 'analytic: K ', analytic%drag_coefficient, ', face sum / momentum - 1 = ', &
