@@ -15,7 +15,10 @@
 !>   320-face quadrature on top: measured -3.5% (force) and -2.7% (torque) at D/dx = 16, -1.1% and
 !>   -0.9% at 32 (observed order 1.6-1.7); bounds 4.5% at 16, 1.5% at 32, order >= 1.4, and the
 !>   lateral force and torque below 1e-3 of the main ones.
-!> - the mean pressure gradient: with the drive f and no flow the face sum is f V exactly.
+!> - the mean pressure gradient: with the drive f and no flow the face sum is f V exactly;
+!> - field_interpolation's masked interpolation (the face sum's pressure probes): a mask of ones
+!>   changes nothing, a masked node's value is ignored, a stencil with no unmasked node falls back
+!>   to the plain interpolation.
 program test_immersed_surface
   use agglo_kinds, only: wp, i8
   use physical_constants, only: pi
@@ -30,6 +33,7 @@ program test_immersed_surface
   use fluid_grid, only: fluid_grid_t, grid_create, allocate_field, x_centre, y_centre, z_centre
   use vector_algebra, only: cross
   use immersed_geometry, only: immersed_body_t, node_position
+  use field_interpolation, only: interpolate_at_points, on_cell_centres
   use immersed_surface_loads, only: surface_loads_t, surface_loads_create, surface_loads_compute
   use test_framework, only: test_start, test_finish, check_below, check_above, check_equal, check_close
   implicit none
@@ -41,6 +45,7 @@ program test_immersed_surface
   call check_equal(max_mesh_level, max_icosphere_level, 'config_mesh_level_range_matches_icosphere')
   call check_mesh_distance()
   call check_stokes_loads()
+  call check_masked_interpolation()
   call test_finish()
 
 contains
@@ -215,6 +220,33 @@ contains
         end do
       end do
     end subroutine fill
+
+  subroutine check_masked_interpolation()
+    type(fluid_grid_t) :: grid
+    real(wp), allocatable :: field(:, :, :), mask(:, :, :)
+    real(wp) :: points(3, 3), plain(3), masked(3)
+    integer :: p
+    call grid_create(grid, 8, 8, 8, 1.0_wp, 1.0_wp, 1.0_wp)
+    call allocate_field(grid, field)
+    call allocate_field(grid, mask)
+    do p = 1, 3
+      points(:, p) = [3.2_wp, 3.4_wp, 3.7_wp] / 8 + 0.1_wp * [stream_uniform(stream), stream_uniform(stream), &
+                                                             stream_uniform(stream)] / 8
+    end do
+    field = 2.0_wp
+    field(4, 4, 4) = 100.0_wp     ! the cell centre (3.5, 3.5, 3.5)/8: in every point's stencil
+    mask = 1.0_wp
+    call interpolate_at_points(grid, field, on_cell_centres, points, plain)
+    call interpolate_at_points(grid, field, on_cell_centres, points, masked, mask=mask)
+    call check_below(maxval(abs(masked - plain)), 1.0e-14_wp * maxval(abs(plain)), 'mask_of_ones_changes_nothing')
+    mask(4, 4, 4) = 0
+    call interpolate_at_points(grid, field, on_cell_centres, points, masked, mask=mask)
+    call check_below(maxval(abs(masked - 2.0_wp)), 1.0e-13_wp, 'masked_node_is_ignored')
+    call check_above(minval(plain), 2.5_wp, 'unmasked_interpolation_sees_the_node')
+    mask = 0
+    call interpolate_at_points(grid, field, on_cell_centres, points, masked, mask=mask)
+    call check_below(maxval(abs(masked - plain)), 1.0e-14_wp * maxval(abs(plain)), 'fully_masked_stencil_falls_back')
+  end subroutine check_masked_interpolation
 
   function grid_text(n) result(text)
     integer, intent(in) :: n
