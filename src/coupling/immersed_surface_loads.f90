@@ -62,6 +62,7 @@ module immersed_surface_loads
     real(wp) :: probe_cells = 1.0_wp              !< h / dx (the prototype's best: 1)
     type(surface_quadrature_t), allocatable :: body(:)
     real(wp), allocatable :: fluid_cells(:, :, :)   !< 1 at the cell centres outside every body, else 0
+    real(wp), allocatable :: marked_pose(:, :)      !< (7, n) centre and orientation fluid_cells was marked for
   end type surface_loads_t
 
 contains
@@ -143,7 +144,7 @@ contains
     call interpolate_at_points(grid, u, on_x_faces, probes, values(:, 1))
     call interpolate_at_points(grid, v, on_y_faces, probes, values(:, 2))
     call interpolate_at_points(grid, w, on_z_faces, probes, values(:, 3))
-    call mark_fluid_cells(grid, bodies, loads%fluid_cells)
+    if (moved(loads%marked_pose, bodies)) call mark_fluid_cells(grid, bodies, loads%fluid_cells)
     call interpolate_at_points(grid, pressure, on_cell_centres, probes, values(:, 4), mask=loads%fluid_cells)
 
     m = 0
@@ -163,6 +164,25 @@ contains
       end do
     end do
   end subroutine surface_loads_compute
+
+  !> True (and the poses recorded) unless every body has the pose of the last marking.
+  logical function moved(marked_pose, bodies)
+    real(wp), allocatable, intent(inout) :: marked_pose(:, :)
+    type(immersed_body_t), intent(in) :: bodies(:)
+    integer :: n
+    moved = .not. allocated(marked_pose)
+    if (.not. moved) moved = size(marked_pose, 2) /= size(bodies)
+    if (moved) then
+      if (allocated(marked_pose)) deallocate(marked_pose)
+      allocate(marked_pose(7, size(bodies)))
+    end if
+    do n = 1, size(bodies)
+      if (.not. moved) moved = any(marked_pose(1:3, n) /= bodies(n)%centre) .or. &
+                               any(marked_pose(4:7, n) /= bodies(n)%orientation)
+      marked_pose(1:3, n) = bodies(n)%centre
+      marked_pose(4:7, n) = bodies(n)%orientation
+    end do
+  end function moved
 
   !> fluid_cells = 1 at the cell centres outside every body, 0 inside (the analytic spheroid; with
   !> the mesh geometry the cells between mesh and spheroid count as inside), on this rank's planes
