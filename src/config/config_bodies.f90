@@ -6,6 +6,9 @@
 !> axis(:, n) (its symmetry axis in the lab frame, any non-zero length), velocity(:, n) (m/s),
 !> angular_velocity(:, n) (rad/s), oscillation_amplitude(:, n) (m) and oscillation_frequency(n) (Hz):
 !> centre(t) = centre + velocity t + amplitude sin(2 pi f t).
+!> geometry: the surface the ghost nodes see, 'analytic' (the spheroid) or 'mesh' (the icosphere of
+!> mesh_level, the paper's fidelity); mesh_level is also the face count of the surface loads' face
+!> sum (load_method = 'surface', computed and logged with either method).
 module config_bodies
   use agglo_kinds, only: wp
   use deck_file, only: deck_t, check_namelist_read, require_option, require_positive, require_nonnegative, &
@@ -16,6 +19,9 @@ module config_bodies
   public :: bodies_config_t, read_bodies_group, check_bodies_group, write_bodies_group, max_bodies
 
   integer, parameter :: max_bodies = 16
+  !> Finest icosphere: icosphere_mesh's max_icosphere_level (config/ does not use particles/; a unit
+  !> test checks that the two agree).
+  integer, parameter, public :: max_mesh_level = 4
 
   type :: bodies_config_t
     integer :: count = 0                                      !< bodies in the box (1..max_bodies)
@@ -30,18 +36,20 @@ module config_bodies
     real(wp) :: oscillation_frequency(max_bodies) = 0         !< Hz
     real(wp) :: ghost_tolerance = 1.0e-12_wp                  !< ghost-row sweeps stop below this relative change
     integer :: max_sweeps = 50                                !< sweeps before the run stops (implicit coupling)
-    character(len=16) :: load_method = 'momentum'             !< 'momentum' ('surface' not yet available)
+    character(len=16) :: load_method = 'momentum'             !< 'momentum' | 'surface' (the face sum)
+    character(len=16) :: geometry = 'analytic'                !< 'analytic' | 'mesh' (ghost nodes' surface)
+    integer :: mesh_level = 2                                 !< icosphere subdivisions: 20 4^level faces (2: 320)
     real(wp) :: driving_force(3) = 0                          !< N/m^3, uniform body force (mean pressure gradient)
   end type bodies_config_t
 
-  integer :: count, max_sweeps
-  character(len=16) :: shape(max_bodies), load_method
+  integer :: count, max_sweeps, mesh_level
+  character(len=16) :: shape(max_bodies), load_method, geometry
   real(wp) :: radius(max_bodies), aspect_ratio(max_bodies), centre(3, max_bodies), axis(3, max_bodies), &
               velocity(3, max_bodies), angular_velocity(3, max_bodies), oscillation_amplitude(3, max_bodies), &
               oscillation_frequency(max_bodies), ghost_tolerance, driving_force(3)
   namelist /bodies/ count, shape, radius, aspect_ratio, centre, axis, velocity, angular_velocity, &
                     oscillation_amplitude, oscillation_frequency, ghost_tolerance, max_sweeps, load_method, &
-                    driving_force
+                    driving_force, geometry, mesh_level
 
 contains
 
@@ -51,7 +59,7 @@ contains
     centre = cfg%centre; axis = cfg%axis; velocity = cfg%velocity; angular_velocity = cfg%angular_velocity
     oscillation_amplitude = cfg%oscillation_amplitude; oscillation_frequency = cfg%oscillation_frequency
     ghost_tolerance = cfg%ghost_tolerance; max_sweeps = cfg%max_sweeps; load_method = cfg%load_method
-    driving_force = cfg%driving_force
+    driving_force = cfg%driving_force; geometry = cfg%geometry; mesh_level = cfg%mesh_level
   end subroutine to_namelist
 
   subroutine from_namelist(cfg)
@@ -60,7 +68,7 @@ contains
     cfg%centre = centre; cfg%axis = axis; cfg%velocity = velocity; cfg%angular_velocity = angular_velocity
     cfg%oscillation_amplitude = oscillation_amplitude; cfg%oscillation_frequency = oscillation_frequency
     cfg%ghost_tolerance = ghost_tolerance; cfg%max_sweeps = max_sweeps; cfg%load_method = load_method
-    cfg%driving_force = driving_force
+    cfg%driving_force = driving_force; cfg%geometry = geometry; cfg%mesh_level = mesh_level
   end subroutine from_namelist
 
   subroutine read_bodies_group(deck, cfg)
@@ -99,9 +107,11 @@ contains
     call require_range('bodies', 'ghost_tolerance', cfg%ghost_tolerance, 1.0e-15_wp, 1.0e-3_wp)
     if (cfg%max_sweeps < 1 .or. cfg%max_sweeps > 10000) call input_error('bodies', 'max_sweeps', &
         int_text(cfg%max_sweeps), '1 to 10000')
-    if (cfg%load_method == 'surface') call input_error('bodies', 'load_method', '''surface''', &
-        '''momentum'' (the surface face-sum load is not available yet)')
-    call require_option('bodies', 'load_method', cfg%load_method, [character(len=8) :: 'momentum'])
+    call require_option('bodies', 'load_method', cfg%load_method, [character(len=8) :: 'momentum', 'surface'])
+    call require_option('bodies', 'geometry', cfg%geometry, [character(len=8) :: 'analytic', 'mesh'])
+    if (cfg%mesh_level < 0 .or. cfg%mesh_level > max_mesh_level) call input_error('bodies', 'mesh_level', &
+        int_text(cfg%mesh_level), '0 to '//int_text(max_mesh_level)//' (icosphere subdivisions, 20 4^level faces: '// &
+        '20 to '//int_text(20 * 4**max_mesh_level)//'; 2 = 320 faces, the paper''s mesh)')
     if (.not. all(abs(cfg%driving_force) < huge(1.0_wp))) call input_error('bodies', 'driving_force', &
         'not finite', 'finite N/m^3')
   end subroutine check_bodies_group

@@ -35,6 +35,8 @@ module immersed_geometry
   use quaternion, only: rotate_to_body, rotation_matrix
   use spheroid, only: spheroid_t, implicit_function, support_value
   use spheroid_distance, only: surface_projection_t, lab_closest_point, body_closest_point
+  use icosphere_mesh, only: icosphere_mesh_t
+  use mesh_distance, only: mesh_contains, mesh_lab_closest_point
   implicit none
   private
   public :: immersed_body_t, immersed_options_t, ghost_node_t, component_nodes_t, immersed_geometry_t
@@ -48,6 +50,8 @@ module immersed_geometry
     type(spheroid_t) :: shape                  !< semi-axes (spheroid.f90)
     real(wp) :: centre(3) = 0.0_wp             !< m, lab frame (any periodic image)
     real(wp) :: orientation(4) = [1.0_wp, 0.0_wp, 0.0_wp, 0.0_wp]   !< unit quaternion, body -> lab
+    !> &bodies geometry = 'mesh': solid test, B and n from this triangulation (mesh_distance); level -1: analytic
+    type(icosphere_mesh_t) :: mesh
   end type immersed_body_t
 
   !> How the image point is placed.
@@ -367,6 +371,9 @@ contains
             d(1) = sep_x(i)
             ! Inside test on the body-frame point R^T d.
             if (.not. (implicit_function(bodies(n)%shape, matmul(d, rotation)) < 0.0_wp)) cycle
+            if (bodies(n)%mesh%level >= 0) then   ! the mesh lies inside the spheroid
+              if (.not. mesh_contains(bodies(n)%mesh, matmul(d, rotation))) cycle
+            end if
             previous = owner(i, j, k)
             if (previous == 0) then
               owner(i, j, k) = n
@@ -403,11 +410,18 @@ contains
 
     box = [grid%lx, grid%ly, grid%lz]
     spacing = [grid%dx, grid%dy, grid%dz]
-    body = bodies(ghost%body)
+    ! The pose only: a copy of the whole body would copy its mesh for every ghost node.
+    body%shape = bodies(ghost%body)%shape
+    body%centre = bodies(ghost%body)%centre
+    body%orientation = bodies(ghost%body)%orientation
     ghost%position = node_position(grid, component, ghost%node(1), ghost%node(2), ghost%node(3))
     ! The image of the body's centre nearest to G: everything below is in G's image frame.
     centre = ghost%position - minimum_image(ghost%position - body%centre, box)
-    projection = lab_closest_point(body%shape, centre, body%orientation, ghost%position)
+    if (bodies(ghost%body)%mesh%level >= 0) then
+      projection = mesh_lab_closest_point(bodies(ghost%body)%mesh, centre, body%orientation, ghost%position)
+    else
+      projection = lab_closest_point(body%shape, centre, body%orientation, ghost%position)
+    end if
     ghost%surface_point = projection%point
     ghost%normal = projection%normal
     ! |d|: G is inside by the implicit function; the computed distance can only be off by round-off.

@@ -131,7 +131,7 @@ contains
       settings%max_sweeps = cfg%bodies%max_sweeps
       settings%fluid_density = cfg%fluid%density
       call immersed_scene_create(bodies, solver, motions_from_config(cfg%bodies, solver%grid), settings, &
-                                 cfg%bodies%driving_force)
+                                 cfg%bodies%driving_force, cfg%bodies%load_method, cfg%bodies%mesh_level)
       call loads_open(bodies, run_file('bodies_loads.dat'), append=cfg%run%restart, last_step=solver%step)
       if (bodies%moving .and. solver%incremental_pressure) call log_line('immersed boundary: note: moving '// &
           'bodies with &fluid pressure_scheme = ''incremental'' give force spikes when nodes are uncovered '// &

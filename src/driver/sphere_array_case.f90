@@ -21,6 +21,7 @@ module sphere_array_case
   use config_fluid, only: fluid_config_t
   use fluid_solver, only: fluid_solver_t, fluid_solver_create
   use spheroid, only: make_spheroid
+  use icosphere_mesh, only: build_icosphere_mesh
   use immersed_boundary, only: ibm_settings_t
   use immersed_scene, only: prescribed_motion_t, immersed_scene_t, immersed_scene_create, immersed_step
   implicit none
@@ -37,6 +38,8 @@ module sphere_array_case
     real(wp) :: offset_cells(3) = [0.13_wp, 0.27_wp, 0.41_wp]   !< sphere centre - box centre, cells
     real(wp) :: ghost_tolerance = 1.0e-12_wp
     logical :: rotating = .false.                !< rotating sphere, no drive, steady torque
+    integer :: mesh_level = -1                   !< ghost nodes see the icosphere of this level ('mesh'); -1 analytic
+    integer :: surface_level = -1                !< icosphere level of the face-sum loads; -1 none (momentum only)
   end type sphere_array_case_t
 
   type :: sphere_array_result_t
@@ -46,6 +49,8 @@ module sphere_array_case
     real(wp) :: force(3) = 0               !< N, momentum-balance load of the last step
     real(wp) :: drive(3) = 0               !< N, f L^3
     real(wp) :: torque(3) = 0              !< N m, momentum-balance torque of the last step
+    real(wp) :: surface_force(3) = 0       !< N, face-sum load of the last step (immersed_surface_loads)
+    real(wp) :: surface_torque(3) = 0      !< N m, face-sum torque of the last step
     real(wp) :: stokes_torque = 0          !< N m, 8 pi mu a^3 Omega (rotating case)
     real(wp) :: radius_over_box = 0        !< a / L
     integer :: steps = 0
@@ -87,6 +92,7 @@ contains
     radius = (3.0_wp * case%volume_fraction / (4.0_wp * pi))**(1.0_wp / 3.0_wp) * box
     motion(1)%shape = make_spheroid('sphere', radius, density)
     motion(1)%centre = 0.5_wp * box + case%offset_cells * solver%grid%dx
+    if (case%mesh_level >= 0) call build_icosphere_mesh(motion(1)%shape, case%mesh_level, motion(1)%mesh)
     settings%coupling = case%coupling
     settings%tolerance = case%ghost_tolerance
     settings%max_sweeps = 100
@@ -97,7 +103,8 @@ contains
       ! Omega a = 1e-7 m/s: Re = Omega a^2 / nu below 1e-4.
       motion(1)%angular_velocity = [0.0_wp, 0.0_wp, 1.0e-7_wp / radius]
     end if
-    call immersed_scene_create(scene, solver, motion, settings, [drive_x, 0.0_wp, 0.0_wp])
+    call immersed_scene_create(scene, solver, motion, settings, [drive_x, 0.0_wp, 0.0_wp], &
+                               surface_level=case%surface_level)
 
     dt = case%viscous_number * solver%grid%dx**2 / viscosity
     u_old = 0
@@ -127,6 +134,8 @@ contains
     result%drive = [drive * box**3, 0.0_wp, 0.0_wp]
     result%drag_coefficient = drive * box**3 / (6.0_wp * pi * density * viscosity * radius * u_new)
     result%force = scene%force(:, 1)
+    result%surface_force = scene%surface_force(:, 1)
+    result%surface_torque = scene%surface_torque(:, 1)
     result%mean_sweeps = sweeps_total / result%steps
     result%slip = scene%projected%largest_change
     result%divergence = scene%divergence

@@ -66,16 +66,25 @@ contains
   end function gradient_here
 
   !> values(p) = field at points(:, p) on every rank (collective; every rank passes the same points).
-  subroutine interpolate_at_points(grid, field, location, points, values)
+  !> With `mask` (0 or 1 per node of the field, same layout and halos), only the nodes of mask 1
+  !> count, the trilinear weights renormalised over them (e.g. the pressure at a probe near an
+  !> immersed body without the cells inside it; unmasked where no weight remains).
+  subroutine interpolate_at_points(grid, field, location, points, values, mask)
     type(fluid_grid_t), intent(in) :: grid
     real(wp), intent(in) :: field(0:, 0:, 0:)
     integer, intent(in) :: location
     real(wp), intent(in) :: points(:, :)          !< (3, n), m
     real(wp), intent(out) :: values(:)            !< (n)
+    real(wp), intent(in), optional :: mask(0:, 0:, 0:)
+    real(wp) :: kept
     integer :: p
     values = 0
     do p = 1, size(points, 2)
-      if (point_on_this_rank(grid, points(:, p))) values(p) = interpolate_here(grid, field, location, points(:, p))
+      if (.not. point_on_this_rank(grid, points(:, p))) cycle
+      values(p) = interpolate_here(grid, field, location, points(:, p))
+      if (.not. present(mask)) cycle
+      kept = interpolate_here(grid, mask, location, points(:, p))
+      if (kept > 1.0e-12_wp) values(p) = stencil_sum(grid, field, location, points(:, p), 0, mask) / kept
     end do
     call MPI_Allreduce(MPI_IN_PLACE, values, size(values), mpi_wp, MPI_SUM, world)
   end subroutine interpolate_at_points
@@ -122,11 +131,13 @@ contains
 
   !> Sum over the point's stencil: the value (derivative = 0) or d/dx_derivative. Each direction
   !> contributes up to 3 nodes (weights in axis_stencil); z indices are local to the slab.
-  real(wp) function stencil_sum(grid, field, location, point, derivative) result(total)
+  !> With `factor`, each node's value is multiplied by the factor's value at the node.
+  real(wp) function stencil_sum(grid, field, location, point, derivative, factor) result(total)
     type(fluid_grid_t), intent(in) :: grid
     real(wp), intent(in) :: field(0:, 0:, 0:)
     integer, intent(in) :: location, derivative
     real(wp), intent(in) :: point(3)
+    real(wp), intent(in), optional :: factor(0:, 0:, 0:)
     integer :: ix(3), iy(3), iz(3), a, b, c
     real(wp) :: wx(3), wy(3), wz(3)
     if (location < on_x_faces .or. location > on_cell_centres) call fatal('field_interpolation: unknown location')
@@ -142,7 +153,11 @@ contains
       do b = 1, 3
         if (wy(b) == 0.0_wp) cycle
         do a = 1, 3
-          total = total + wx(a) * wy(b) * wz(c) * field(ix(a), iy(b), iz(c))
+          if (present(factor)) then
+            total = total + wx(a) * wy(b) * wz(c) * field(ix(a), iy(b), iz(c)) * factor(ix(a), iy(b), iz(c))
+          else
+            total = total + wx(a) * wy(b) * wz(c) * field(ix(a), iy(b), iz(c))
+          end if
         end do
       end do
     end do

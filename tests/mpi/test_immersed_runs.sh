@@ -7,7 +7,7 @@
 #  - the file has one row per body per step and the log names the sweeps and the residual;
 #  - a restart continues bodies_loads.dat bit for bit (rows after the checkpoint dropped);
 #  - refused decks, before any step, with a message naming the variable: Crank-Nicolson diffusion
-#    with bodies, load_method = 'surface', a disk thinner than 4 cells (the message gives the grid).
+#    with bodies, an unknown load_method, a disk thinner than 4 cells (the message gives the grid).
 # Prints PASS/FAIL lines; works in a temporary directory.
 set -u
 AGGLO=${AGGLO:?AGGLO must be the agglo executable}
@@ -75,8 +75,8 @@ refused() { # test name, deck file, expected text in the message
 }
 deck cn implicit crank_nicolson momentum needle 32 > cn.nml
 refused refuses_crank_nicolson_with_bodies cn.nml 'viscous_scheme'
-deck surface implicit explicit surface needle 32 > surface.nml
-refused refuses_surface_loads surface.nml 'load_method'
+deck faces implicit explicit faces needle 32 > faces.nml
+refused refuses_unknown_load_method faces.nml 'load_method'
 deck thin implicit explicit momentum disk 16 > thin.nml
 refused refuses_thin_disk_with_grid thin.nml 'nx = ny = nz >='
 
