@@ -31,7 +31,7 @@ module point_particle_coupling
   use stokes_resistance, only: stokes_resistance_t, stokes_resistance_of, stokes_loads_lab, &
                                spheroid_added_mass_coefficients
   use fluid_grid, only: fluid_grid_t
-  use field_interpolation, only: on_x_faces, on_y_faces, on_z_faces, interpolate_at_points
+  use field_interpolation, only: on_x_faces, on_y_faces, on_z_faces, interpolate_at_points, velocity_gradient_at_points
   implicit none
   private
   public :: point_coupling_t, point_fluid_t, point_coupling_create, point_coupling_sample, point_fluid_at, &
@@ -114,47 +114,22 @@ contains
   end subroutine point_coupling_sample
 
   !> The velocity and its gradient G(a, b) = d u_a / d x_b at points (m), on every rank
-  !> (collective; u, v, w with current halos). G is the centred difference of interpolated values
-  !> half a node spacing either side, (u_a(x + h_b/2 e_b) - u_a(x - h_b/2 e_b)) / h_b: for
-  !> trilinear interpolation that is the linear interpolation of the centred node differences, the
-  !> same as field_interpolation's gradient, but every value comes from the rank that owns its point,
-  !> so the result does not depend on where the slabs end (field_interpolation extrapolates d w / dz
-  !> in the lower half of a slab's bottom cell) and a run gives the same loads on any rank count.
+  !> (collective; u, v, w with current halos): field_interpolation's trilinear value and centred
+  !> gradient, which give the same result on any number of ranks.
   subroutine sample_velocity(grid, u, v, w, points, velocity, gradient)
     type(fluid_grid_t), intent(in) :: grid
     real(wp), intent(in) :: u(0:, 0:, 0:), v(0:, 0:, 0:), w(0:, 0:, 0:)
     real(wp), intent(in) :: points(:, :)            !< (3, n)
     real(wp), intent(out) :: velocity(:, :)         !< (3, n) m/s
     real(wp), intent(out) :: gradient(:, :, :)      !< (3, 3, n) 1/s
-    ! Per point p, columns 7 (p - 1) + 1 .. 7 p of the stencil: the point, then x +- h_1/2, y +- h_2/2, z +- h_3/2.
-    real(wp) :: stencil(3, 7 * size(points, 2)), values(7 * size(points, 2)), spacing(3)
-    integer :: p, d, a, first
-    spacing = [grid%dx, grid%dy, grid%dz]
-    do p = 1, size(points, 2)
-      first = 7 * (p - 1) + 1
-      stencil(:, first:first + 6) = spread(points(:, p), 2, 7)
-      do d = 1, 3
-        stencil(d, first + 2 * d - 1) = points(d, p) + 0.5_wp * spacing(d)
-        stencil(d, first + 2 * d) = points(d, p) - 0.5_wp * spacing(d)
-      end do
-    end do
-    do a = 1, 3
-      select case (a)
-      case (1)
-        call interpolate_at_points(grid, u, on_x_faces, stencil, values)
-      case (2)
-        call interpolate_at_points(grid, v, on_y_faces, stencil, values)
-      case default
-        call interpolate_at_points(grid, w, on_z_faces, stencil, values)
-      end select
-      do p = 1, size(points, 2)
-        first = 7 * (p - 1) + 1
-        velocity(a, p) = values(first)
-        do d = 1, 3
-          gradient(a, d, p) = (values(first + 2 * d - 1) - values(first + 2 * d)) / spacing(d)
-        end do
-      end do
-    end do
+    real(wp) :: values(size(points, 2))
+    call interpolate_at_points(grid, u, on_x_faces, points, values)
+    velocity(1, :) = values
+    call interpolate_at_points(grid, v, on_y_faces, points, values)
+    velocity(2, :) = values
+    call interpolate_at_points(grid, w, on_z_faces, points, values)
+    velocity(3, :) = values
+    call velocity_gradient_at_points(grid, u, v, w, points, gradient)
   end subroutine sample_velocity
 
   !> The undisturbed flow at position (m) at the fraction theta in [0, 1] of the sampled fluid step,

@@ -13,10 +13,11 @@
 !> halo layer; the collective routines then sum over ranks. One layer is enough: along x and y
 !> every rank holds the whole periodic plane (indices wrap), and along z the nodes around any
 !> point of the slab lie on the slab or on its halo planes. The one exception is d/dz of a field
-!> on the z faces (w) in the lower half of the slab's bottom cell, whose centred differences would
-!> need a second halo plane: there the two differences nearest the point inside the slab are
-!> extrapolated linearly (by at most half a cell: still second order, exact for trilinear fields).
-!> Fields must have current halos.
+!> on the z faces (w): its stencil reaches from the face below z - dz/2 to two faces above, so it
+!> is evaluated by the rank whose slab holds z - dz/2 (derivative_on_this_rank), which holds all
+!> three faces with its halo. Every value and derivative is thus computed from the same global
+!> nodes with the same weights on any number of ranks: results agree to round-off (bit for bit
+!> but for the order of the final sum). Fields must have current halos.
 module field_interpolation
   use mpi_f08, only: MPI_Allreduce, MPI_IN_PLACE, MPI_SUM
   use agglo_kinds, only: wp
@@ -26,7 +27,7 @@ module field_interpolation
   implicit none
   private
   public :: on_x_faces, on_y_faces, on_z_faces, on_cell_centres, point_on_this_rank, interpolate_here, &
-            gradient_here, interpolate_at_points, gradient_at_points, velocity_gradient_at_points
+            interpolate_at_points, gradient_at_points, velocity_gradient_at_points
 
   !> Where a field's nodes are (fluid_grid): u on the x faces, v on y, w on z, pressure at centres.
   integer, parameter :: on_x_faces = 1, on_y_faces = 2, on_z_faces = 3, on_cell_centres = 4
@@ -37,11 +38,31 @@ contains
   logical function point_on_this_rank(grid, point)
     type(fluid_grid_t), intent(in) :: grid
     real(wp), intent(in) :: point(3)
+    point_on_this_rank = slab_holds(grid, point(3))
+  end function point_on_this_rank
+
+  !> True if this rank evaluates d/dx_derivative of a field at the point: the rank of the point,
+  !> except for d/dz on the z faces, the rank of z - dz/2 (see the module header).
+  logical function derivative_on_this_rank(grid, point, location, derivative)
+    type(fluid_grid_t), intent(in) :: grid
+    real(wp), intent(in) :: point(3)
+    integer, intent(in) :: location, derivative
+    if (location == on_z_faces .and. derivative == 3) then
+      derivative_on_this_rank = slab_holds(grid, point(3) - 0.5_wp * grid%dz)
+    else
+      derivative_on_this_rank = slab_holds(grid, point(3))
+    end if
+  end function derivative_on_this_rank
+
+  !> True if this rank's slab holds the cell of height z (any value: wrapped into the box).
+  logical function slab_holds(grid, z)
+    type(fluid_grid_t), intent(in) :: grid
+    real(wp), intent(in) :: z
     integer :: cell
     ! min: z just below lz may divide to nz by rounding; it belongs to the top cell.
-    cell = min(floor(wrapped(point(3), grid%lz) / grid%dz), grid%nz - 1)
-    point_on_this_rank = (cell >= grid%z_offset .and. cell < grid%z_offset + grid%nz_local)
-  end function point_on_this_rank
+    cell = min(floor(wrapped(z, grid%lz) / grid%dz), grid%nz - 1)
+    slab_holds = (cell >= grid%z_offset .and. cell < grid%z_offset + grid%nz_local)
+  end function slab_holds
 
   !> The field's value at a point this rank evaluates (point_on_this_rank).
   real(wp) function interpolate_here(grid, field, location, point) result(value)
@@ -51,19 +72,6 @@ contains
     real(wp), intent(in) :: point(3)
     value = stencil_sum(grid, field, location, point, 0)
   end function interpolate_here
-
-  !> The field's gradient (per m) at a point this rank evaluates.
-  function gradient_here(grid, field, location, point) result(gradient)
-    type(fluid_grid_t), intent(in) :: grid
-    real(wp), intent(in) :: field(0:, 0:, 0:)
-    integer, intent(in) :: location
-    real(wp), intent(in) :: point(3)
-    real(wp) :: gradient(3)
-    integer :: d
-    do d = 1, 3
-      gradient(d) = stencil_sum(grid, field, location, point, d)
-    end do
-  end function gradient_here
 
   !> values(p) = field at points(:, p) on every rank (collective; every rank passes the same points).
   !> With `mask` (0 or 1 per node of the field, same layout and halos), only the nodes of mask 1
@@ -97,9 +105,13 @@ contains
     real(wp), intent(in) :: points(:, :)          !< (3, n), m
     real(wp), intent(out) :: gradients(:, :)      !< (3, n), field unit per m
     integer :: p
+    integer :: d
     gradients = 0
     do p = 1, size(points, 2)
-      if (point_on_this_rank(grid, points(:, p))) gradients(:, p) = gradient_here(grid, field, location, points(:, p))
+      do d = 1, 3
+        if (derivative_on_this_rank(grid, points(:, p), location, d)) &
+            gradients(d, p) = stencil_sum(grid, field, location, points(:, p), d)
+      end do
     end do
     call MPI_Allreduce(MPI_IN_PLACE, gradients, size(gradients), mpi_wp, MPI_SUM, world)
   end subroutine gradient_at_points
@@ -111,13 +123,17 @@ contains
     real(wp), intent(in) :: u(0:, 0:, 0:), v(0:, 0:, 0:), w(0:, 0:, 0:)
     real(wp), intent(in) :: points(:, :)          !< (3, n), m
     real(wp), intent(out) :: gradients(:, :, :)   !< (3, 3, n)
-    integer :: p
+    integer :: p, d
     gradients = 0
     do p = 1, size(points, 2)
-      if (.not. point_on_this_rank(grid, points(:, p))) cycle
-      gradients(1, :, p) = gradient_here(grid, u, on_x_faces, points(:, p))
-      gradients(2, :, p) = gradient_here(grid, v, on_y_faces, points(:, p))
-      gradients(3, :, p) = gradient_here(grid, w, on_z_faces, points(:, p))
+      do d = 1, 3
+        if (derivative_on_this_rank(grid, points(:, p), on_x_faces, d)) &
+            gradients(1, d, p) = stencil_sum(grid, u, on_x_faces, points(:, p), d)
+        if (derivative_on_this_rank(grid, points(:, p), on_y_faces, d)) &
+            gradients(2, d, p) = stencil_sum(grid, v, on_y_faces, points(:, p), d)
+        if (derivative_on_this_rank(grid, points(:, p), on_z_faces, d)) &
+            gradients(3, d, p) = stencil_sum(grid, w, on_z_faces, points(:, p), d)
+      end do
     end do
     call MPI_Allreduce(MPI_IN_PLACE, gradients, size(gradients), mpi_wp, MPI_SUM, world)
   end subroutine velocity_gradient_at_points
@@ -167,8 +183,10 @@ contains
   !> is at (m - 1/2) h for a centred direction, m h for a face direction. Value: the two nodes
   !> around s, linear weights. Derivative: the differences D_m = (f_{m+1} - f_m) / h sit half-way,
   !> the two around s are combined linearly, giving three nodes. Periodic directions wrap the
-  !> index into 1..n; the slab direction (sliced) returns local indices 0..nz_local+1 and moves the
-  !> derivative's nodes up into the slab where they would need a second halo plane (extrapolation).
+  !> index into 1..n; the slab direction (sliced) returns local indices 0..nz_local+1 on the rank
+  !> that evaluates the point (point_on_this_rank, derivative_on_this_rank): there the first node
+  !> is on the slab, once a stencil that starts below the box (d/dz on the z faces for
+  !> s < h/2, evaluated by the top slab) is moved up by the period.
   subroutine axis_stencil(s, h, n, centred, derivative, sliced, offset, n_local, index, weight)
     real(wp), intent(in) :: s, h
     integer, intent(in) :: n, offset, n_local
@@ -181,8 +199,8 @@ contains
     if (centred) q = q + 0.5_wp
     if (derivative) q = q - 0.5_wp
     m0 = floor(q)
-    if (sliced .and. derivative) m0 = min(max(m0, offset), offset + n_local - 1)
     t = q - m0
+    if (sliced .and. m0 < offset) m0 = m0 + n
     if (derivative) then
       weight = [-(1.0_wp - t), 1.0_wp - 2.0_wp * t, t] / h
     else

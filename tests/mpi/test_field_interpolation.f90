@@ -6,7 +6,13 @@
 !>   trilinear functions, and centred differences of a trilinear function are exact);
 !> - a smooth periodic field at points next to the periodic wrap in x, y, z, on both sides of the
 !>   rank boundary, and outside the box (wrapped): the rms errors of value and gradient converge at second order
-!>   (16^3, 32^3, 64^3; the design order of trilinear interpolation and centred differences).
+!>   (16^3, 32^3, 64^3; the design order of trilinear interpolation and centred differences);
+!> - the gradient of the smooth field equals the difference of the interpolated values half a node
+!>   spacing either side, (f(x + h/2 e_d) - f(x - h/2 e_d)) / h, to round-off: for trilinear
+!>   interpolation that is the centred node differences interpolated linearly, the same nodes and
+!>   weights whichever rank evaluates them. It checks that no rank extrapolates near its slab's
+!>   lower boundary (d/dz of w there needs the rank below): the gradient does not depend on the
+!>   number of ranks.
 program test_field_interpolation
   use agglo_kinds, only: wp, i8
   use random_stream, only: random_stream_t, stream_seed, stream_uniform
@@ -29,6 +35,10 @@ program test_field_interpolation
 
   do location = 1, 4
     call check_trilinear(location)
+  end do
+
+  do location = 1, 4
+    call check_half_cell_differences(location)
   end do
 
   do n = 1, 3
@@ -154,6 +164,44 @@ contains
     call check_below(gradient_error, 1.0e-12_wp, 'trilinear_gradient_exact_'//trim(names(location)))
     call check_above(real(q, wp), 30.0_wp, 'trilinear_points_tested_'//trim(names(location)))
   end subroutine check_trilinear
+
+  !> The smooth field of this location at 16^3 (halos by the exchange): gradient_at_points against
+  !> the differences of interpolate_at_points half a node spacing either side of every point.
+  subroutine check_half_cell_differences(location)
+    integer, intent(in) :: location
+    type(fluid_grid_t) :: grid
+    real(wp), allocatable :: field(:, :, :), gradients(:, :), plus(:), minus(:), shifted(:, :)
+    real(wp) :: spacing(3), largest, difference
+    integer :: i, j, k, d, p
+    call grid_create(grid, 16, 16, 16, lx, ly, lz)
+    call allocate_field(grid, field)
+    do k = 1, grid%nz_local
+      do j = 1, grid%ny
+        do i = 1, grid%nx
+          field(i, j, k) = smooth(location, node_position(grid, location, i, j, grid%z_offset + k))
+        end do
+      end do
+    end do
+    call exchange_halos(grid, field)
+    allocate(gradients(3, size(points, 2)), plus(size(points, 2)), minus(size(points, 2)))
+    call gradient_at_points(grid, field, location, points, gradients)
+    spacing = [grid%dx, grid%dy, grid%dz]
+    largest = 0
+    difference = 0
+    do d = 1, 3
+      shifted = points
+      shifted(d, :) = points(d, :) + 0.5_wp * spacing(d)
+      call interpolate_at_points(grid, field, location, shifted, plus)
+      shifted(d, :) = points(d, :) - 0.5_wp * spacing(d)
+      call interpolate_at_points(grid, field, location, shifted, minus)
+      do p = 1, size(points, 2)
+        difference = max(difference, abs(gradients(d, p) - (plus(p) - minus(p)) / spacing(d)))
+        largest = max(largest, abs(gradients(d, p)))
+      end do
+    end do
+    ! Round-off of differences of O(1) values over h = 1/32 m .. 1/8 m: 1e-12 of the gradient.
+    call check_below(difference / largest, 1.0e-12_wp, 'gradient_is_half_cell_difference_'//trim(names(location)))
+  end subroutine check_half_cell_differences
 
   !> A smooth periodic field (one per velocity component) and its gradient.
   pure real(wp) function smooth(component, r)
