@@ -22,7 +22,8 @@ module immersed_scene
   use config_bodies, only: bodies_config_t
   use immersed_geometry, only: immersed_body_t, thin_dimension_cells
   use immersed_boundary, only: immersed_boundary_t, ibm_settings_t, imposition_report_t, ibm_set_bodies, &
-                               ibm_impose, ibm_begin_step, ibm_step_loads, cell_divergence_max
+                               ibm_impose, ibm_begin_step, ibm_step_loads, cell_divergence_max, ibm_extend_pressure, &
+                               status_change_summary
   implicit none
   private
   public :: prescribed_motion_t, immersed_scene_t, immersed_scene_create, immersed_step, motion_body, &
@@ -41,6 +42,7 @@ module immersed_scene
 
   type :: immersed_scene_t
     type(immersed_boundary_t) :: ibm
+    logical :: extend_pressure = .true.        !< ibm_extend_pressure after every step (moving bodies)
     type(prescribed_motion_t), allocatable :: motion(:)
     real(wp) :: driving_force(3) = 0           !< N/m^3, uniform body force on the whole box (mean pressure gradient)
     real(wp), allocatable :: force_u(:, :, :), force_v(:, :, :), force_w(:, :, :)   !< m/s^2, f / rho
@@ -104,6 +106,7 @@ contains
     call ibm_impose(scene%ibm, solver%grid, solver%u, solver%v, solver%w, scene%projected)
     scene%divergence = cell_divergence_max(solver%grid, solver%u, solver%v, solver%w)
     call ibm_step_loads(scene%ibm, solver%grid, solver%u, solver%v, solver%w, dt, scene%force, scene%torque)
+    if (scene%extend_pressure) call ibm_extend_pressure(scene%ibm, solver%grid, solver%pressure)
     call timer_toc(scene%timer)
     call fluid_finish_step(solver)
   end subroutine immersed_step
@@ -243,5 +246,6 @@ contains
                   int_text(scene%predicted%exchanges)//')'// &
                   ', residual '//real_text(scene%predicted%residual)//', slip '// &
                   real_text(scene%projected%largest_change)//', cut-cell divergence '//real_text(scene%divergence)//' 1/s')
+    if (scene%moving) call log_line(status_change_summary(scene%ibm%changes))
   end subroutine loads_close
 end module immersed_scene
