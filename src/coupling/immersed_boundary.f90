@@ -26,6 +26,11 @@
 !>   for a rigid body. Taken over the nodes the body holds at n+1, it also carries the momentum a
 !>   node brings when it is covered or leaves when it is uncovered, so a change of status adds no
 !>   spike u/dt to the force (docs/theory.md). The torque likewise with r x.
+!> - Moving bodies (docs/theory.md, "Immersed boundary: moving bodies"): a node the body uncovers
+!>   keeps its last ghost value (nothing here writes fluid nodes); the pressure of the sealed cells
+!>   next to the fluid is extrapolated from the open cells after every step (ibm_extend_pressure),
+!>   so that the incremental predictor's old gradient at an uncovered node is the fluid's; the
+!>   nodes changing status and the load jumps they cause are counted (status_change_report_t).
 module immersed_boundary
   use, intrinsic :: iso_fortran_env, only: int8, int64
   use mpi_f08, only: MPI_Sendrecv, MPI_Allreduce, MPI_IN_PLACE, MPI_SUM, MPI_MAX, MPI_LOR, MPI_LOGICAL, MPI_INTEGER, &
