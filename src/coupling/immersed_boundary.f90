@@ -26,8 +26,13 @@
 !>   for a rigid body. Taken over the nodes the body holds at n+1, it also carries the momentum a
 !>   node brings when it is covered or leaves when it is uncovered, so a change of status adds no
 !>   spike u/dt to the force (docs/theory.md). The torque likewise with r x.
+!> - Moving bodies (docs/theory.md, "Immersed boundary: moving bodies"): a node the body uncovers
+!>   keeps its last ghost value (nothing here writes fluid nodes); the pressure of the sealed cells
+!>   next to the fluid is extrapolated from the open cells after every step (ibm_extend_pressure),
+!>   so that the incremental predictor's old gradient at an uncovered node is the fluid's; the
+!>   nodes changing status and the load jumps they cause are counted (status_change_report_t).
 module immersed_boundary
-  use, intrinsic :: iso_fortran_env, only: int8
+  use, intrinsic :: iso_fortran_env, only: int8, int64
   use mpi_f08, only: MPI_Sendrecv, MPI_Allreduce, MPI_IN_PLACE, MPI_SUM, MPI_MAX, MPI_LOR, MPI_LOGICAL, MPI_INTEGER, &
                      MPI_STATUS_IGNORE
   use agglo_kinds, only: wp
@@ -37,11 +42,20 @@ module immersed_boundary
   use fluid_grid, only: fluid_grid_t
   use halo_exchange, only: exchange_slab_halos
   use immersed_geometry, only: immersed_body_t, immersed_options_t, immersed_geometry_t, component_nodes_t, &
-                               classify_nodes, node_position, node_ghost
+                               classify_nodes, node_position, node_ghost, node_fluid
   implicit none
   private
-  public :: immersed_boundary_t, ibm_settings_t, imposition_report_t
+  public :: immersed_boundary_t, ibm_settings_t, imposition_report_t, status_change_report_t
   public :: ibm_set_bodies, ibm_impose, ibm_begin_step, ibm_step_loads, cell_divergence_max
+  public :: ibm_extend_pressure, status_change_summary
+
+  !> A copy of the three components' status fields (the previous classification).
+  type :: status_field_t
+    integer(int8), allocatable :: status(:, :, :)
+  end type status_field_t
+  type :: status_fields_t
+    type(status_field_t) :: field(3)
+  end type status_fields_t
 
   !> Lever arms r (minimum image of the point - the body's centre, m) of one component's nodes,
   !> computed once per placement so that an imposition costs only U + Omega x r per node.
@@ -68,6 +82,28 @@ module immersed_boundary
     real(wp) :: velocity_scale = 0      !< m/s, the scale of residual and largest_change
   end type imposition_report_t
 
+  !> Nodes that change status as the bodies move, and the load jumps they cause (docs/theory.md,
+  !> "Immersed boundary: moving bodies"). The jump of a step is the change of the force beyond the
+  !> trend of the previous step, |F^{n+1} - 2 F^n + F^{n-1}| (vector norm, the largest over the
+  !> bodies; a smooth load gives O(dt^2), a spike s at one step gives 2 s), over the load scale, the
+  !> root mean square of |F| over the steps so far. The first `settling_steps` steps (the start of
+  !> the motion from rest) are left out of both. A jump at a step with status changes or right after
+  !> one counts as a jump at a status change.
+  type :: status_change_report_t
+    integer :: uncovered = 0                  !< nodes (all components, all ranks) fluid at n+1, solid at n
+    integer :: covered = 0                    !< nodes fluid at n, solid at n+1
+    integer(int64) :: total_uncovered = 0, total_covered = 0   !< over the run
+    integer :: steps_with_changes = 0         !< steps in which some node changed status
+    integer :: steps = 0                      !< steps with loads
+    integer :: settling_steps = 10            !< steps left out at the start
+    real(wp) :: mean_square = 0               !< N^2, sum of |F|^2 (largest over the bodies) after the settling steps
+    real(wp) :: last_jump = 0                 !< the last step's jump over the load scale
+    real(wp) :: largest_jump_changes = 0      !< largest jump over the steps with status changes
+    real(wp) :: largest_jump_steady = 0       !< largest jump over the other steps
+    integer :: step_of_largest = 0            !< step (counted from the first with loads) of largest_jump_changes
+    logical :: changed_before = .false.       !< nodes changed status in the previous step
+  end type status_change_report_t
+
   type :: immersed_boundary_t
     type(ibm_settings_t) :: settings
     type(immersed_geometry_t) :: geometry
@@ -84,6 +120,11 @@ module immersed_boundary
     real(wp), allocatable :: below(:, :, :, :), above(:, :, :, :)   !< copies of the neighbours' planes, per component
     type(lever_arms_t) :: arms(3)        !< per component, for the current placement
     real(wp), allocatable :: arm_centres(:, :)   !< (3, n) the centres the lever arms were computed for
+    type(status_change_report_t) :: changes      !< status changes and load jumps (moving bodies)
+    real(wp), allocatable :: force_history(:, :, :)   !< (3, n, 2) N, the forces of the last two steps
+    !> Work fields of ibm_extend_pressure (field layout, halos): 1 where the cell has a fluid face,
+    !> and the values a cell offers to the cell below (above) it by linear extrapolation
+    real(wp), allocatable :: cell_open(:, :, :), offer_down(:, :, :), offer_up(:, :, :)
   end type immersed_boundary_t
 
 contains
@@ -100,6 +141,7 @@ contains
     integer :: n, c, planes
     logical :: remote
     character(len=200) :: text
+    type(status_fields_t) :: previous
 
     n = size(bodies)
     if (.not. allocated(ibm%bodies)) then
@@ -111,6 +153,8 @@ contains
     ibm%velocity = velocity
     ibm%angular_velocity = angular_velocity
     if (.not. classify .and. allocated(ibm%arm_centres)) then
+      ibm%changes%uncovered = 0
+      ibm%changes%covered = 0
       ! Unchanged centres (a fixed or only spinning sphere): the lever arms stand.
       if (any(ibm%arm_centres(1, :) /= ibm%bodies(:)%centre(1)) .or. &
           any(ibm%arm_centres(2, :) /= ibm%bodies(:)%centre(2)) &
@@ -126,7 +170,13 @@ contains
     case default
       call fatal('immersed boundary: coupling = '''//trim(ibm%settings%coupling)//'''; allowed: implicit, explicit')
     end select
+    if (allocated(ibm%geometry%component(1)%status)) then
+      do c = 1, 3
+        previous%field(c)%status = ibm%geometry%component(c)%status
+      end do
+    end if
     call classify_nodes(grid, bodies, options, ibm%geometry)
+    call count_status_changes(ibm, grid, previous)
     planes = 0
     remote = .false.
     do c = 1, 3
@@ -150,6 +200,30 @@ contains
     end if
     call compute_lever_arms(ibm, grid)
   end subroutine ibm_set_bodies
+
+  !> Nodes of this rank's planes whose fluid/solid status differs from the previous classification
+  !> (previous%field(c)%status, unallocated before the first one), summed over the ranks.
+  subroutine count_status_changes(ibm, grid, previous)
+    type(immersed_boundary_t), intent(inout) :: ibm
+    type(fluid_grid_t), intent(in) :: grid
+    type(status_fields_t), intent(in) :: previous
+    integer :: c, counts(2)
+    counts = 0
+    if (allocated(previous%field(1)%status)) then
+      do c = 1, 3
+        associate (now => ibm%geometry%component(c)%status(1:grid%nx, 1:grid%ny, 1:grid%nz_local), &
+                   before => previous%field(c)%status(1:grid%nx, 1:grid%ny, 1:grid%nz_local))
+          counts(1) = counts(1) + count(now == node_fluid .and. before /= node_fluid)
+          counts(2) = counts(2) + count(now /= node_fluid .and. before == node_fluid)
+        end associate
+      end do
+    end if
+    call MPI_Allreduce(MPI_IN_PLACE, counts, 2, MPI_INTEGER, MPI_SUM, world)
+    ibm%changes%uncovered = counts(1)
+    ibm%changes%covered = counts(2)
+    ibm%changes%total_uncovered = ibm%changes%total_uncovered + counts(1)
+    ibm%changes%total_covered = ibm%changes%total_covered + counts(2)
+  end subroutine count_status_changes
 
   subroutine compute_lever_arms(ibm, grid)
     type(immersed_boundary_t), intent(inout) :: ibm
@@ -213,7 +287,218 @@ contains
     ibm%inertia_change = total(7:12, :)
     force = (-total(1:3, :) + total(7:9, :)) / dt
     torque = (-total(4:6, :) + total(10:12, :)) / dt
+    call record_load_jump(ibm%changes, ibm%force_history, force)
   end subroutine ibm_step_loads
+
+  !> The load jump of the step (status_change_report_t), counted apart for the steps in which
+  !> nodes changed status; the force history moves on.
+  subroutine record_load_jump(changes, history, force)
+    type(status_change_report_t), intent(inout) :: changes
+    real(wp), allocatable, intent(inout) :: history(:, :, :)   !< (3, n, 2): F^n, F^{n-1}
+    real(wp), intent(in) :: force(:, :)
+    integer :: n
+    real(wp) :: jump, largest, scale
+    changes%steps = changes%steps + 1
+    if (changes%uncovered + changes%covered > 0) changes%steps_with_changes = changes%steps_with_changes + 1
+    if (.not. allocated(history)) then
+      allocate(history(3, size(force, 2), 2))
+      history = 0
+    end if
+    changes%last_jump = 0
+    if (changes%steps > changes%settling_steps) then
+      largest = 0
+      jump = 0
+      do n = 1, size(force, 2)
+        largest = max(largest, norm2(force(:, n)))
+        jump = max(jump, norm2(force(:, n) - 2.0_wp * history(:, n, 1) + history(:, n, 2)))
+      end do
+      changes%mean_square = changes%mean_square + largest**2
+      scale = sqrt(changes%mean_square / (changes%steps - changes%settling_steps))
+      if (changes%steps > changes%settling_steps + 2 .and. scale > 0.0_wp) then
+        changes%last_jump = jump / scale
+        ! A spike at step n shows in the jumps of steps n and n + 1.
+        if (changes%uncovered + changes%covered > 0 .or. changes%changed_before) then
+          if (changes%last_jump > changes%largest_jump_changes) changes%step_of_largest = changes%steps
+          changes%largest_jump_changes = max(changes%largest_jump_changes, changes%last_jump)
+        else
+          changes%largest_jump_steady = max(changes%largest_jump_steady, changes%last_jump)
+        end if
+      end if
+    end if
+    history(:, :, 2) = history(:, :, 1)
+    history(:, :, 1) = force
+    changes%changed_before = changes%uncovered + changes%covered > 0
+  end subroutine record_load_jump
+
+  !> One log line on the status changes of a run and the load jumps (status_change_report_t).
+  function status_change_summary(changes) result(line)
+    type(status_change_report_t), intent(in) :: changes
+    character(len=:), allocatable :: line
+    character(len=320) :: text
+    write(text, '(a,i0,a,i0,a,i0,a,i0,a,es9.2,a,i0,a,es9.2,a)') 'immersed boundary: status changes: ', &
+        changes%total_uncovered, ' nodes uncovered and ', changes%total_covered, ' covered in ', &
+        changes%steps_with_changes, ' of ', changes%steps, ' steps; largest load jump |F(n+1) - 2 F(n) + F(n-1)| ', &
+        changes%largest_jump_changes, ' of the rms load at a status change (step ', changes%step_of_largest, &
+        '), ', changes%largest_jump_steady, ' at other steps'
+    line = trim(text)
+  end function status_change_summary
+
+  !> The pressure of the sealed cells next to the fluid (collective; call after the projection,
+  !> with the classification of the velocity just projected and every pressure halo current).
+  !> A sealed cell has no fluid face: its pressure enters no fluid node's gradient, and the
+  !> projection, which sees the cut cells' divergence every step, lets it grow without bound (the
+  !> increments phi are harmonic inside the body). When the body moves, a sealed cell next to the
+  !> fluid can open in the next step, and its pressure then enters the incremental predictor's
+  !> -(dt/rho) G p^{n-1/2} at the uncovered face. So every sealed cell with an open neighbour
+  !> takes the mean over its open neighbours N1 = C + e (the six directions e) of the linear
+  !> extrapolation 2 p(N1) - p(N1 + e) when N1 + e is open too, else p(N1): the gradient at a
+  !> face that opens is then the gradient one cell further out (docs/theory.md, moving bodies).
+  !> Open cells are never changed, so fixed bodies give the same velocity to the bit.
+  subroutine ibm_extend_pressure(ibm, grid, pressure)
+    type(immersed_boundary_t), intent(inout) :: ibm
+    type(fluid_grid_t), intent(inout) :: grid
+    real(wp), intent(inout) :: pressure(0:, 0:, 0:)
+    integer :: i, j, k, nx, ny, nzl, d, count
+    real(wp) :: total
+    integer, parameter :: step_x(4) = [1, -1, 0, 0], step_y(4) = [0, 0, 1, -1]
+    logical, allocatable :: near_i(:), near_j(:), near_k(:)
+    nx = grid%nx; ny = grid%ny; nzl = grid%nz_local
+    if (.not. allocated(ibm%cell_open)) then
+      allocate(ibm%cell_open, ibm%offer_down, ibm%offer_up, mold=pressure)
+      ibm%cell_open = 1; ibm%offer_down = 0; ibm%offer_up = 0
+    end if
+    ! Only cells within 3 of a solid node are visited (a tensor product of index ranges, like the
+    ! classification's); cell_open stays 1 elsewhere: a body moves less than a cell per step, so
+    ! the cells it sealed before lie in the new range.
+    call near_ranges(ibm, grid, 3, near_i, near_j, near_k)
+    associate (su => ibm%geometry%component(1)%status, sv => ibm%geometry%component(2)%status, &
+               sw => ibm%geometry%component(3)%status, open => ibm%cell_open)
+      ! A cell is open when one of its six faces (u(i-1), u(i), v(j-1), v(j), w(k-1), w(k)) is a fluid node.
+      do k = 1, nzl
+        if (.not. near_k(k)) cycle
+        do j = 1, ny
+          if (.not. near_j(j)) cycle
+          do i = 1, nx
+            if (.not. near_i(i)) cycle
+            open(i, j, k) = merge(1.0_wp, 0.0_wp, su(i - 1, j, k) == node_fluid .or. su(i, j, k) == node_fluid .or. &
+                                  sv(i, j - 1, k) == node_fluid .or. sv(i, j, k) == node_fluid .or. &
+                                  sw(i, j, k - 1) == node_fluid .or. sw(i, j, k) == node_fluid)
+          end do
+        end do
+      end do
+      call exchange_slab_halos(grid%slab, open)
+      ! What each open cell offers its z neighbours (these may be on the next rank).
+      do k = 1, nzl
+        if (.not. near_k(k)) cycle
+        do j = 1, ny
+          if (.not. near_j(j)) cycle
+          do i = 1, nx
+            if (.not. near_i(i)) cycle
+            if (open(i, j, k) > 0.5_wp) then
+              ibm%offer_down(i, j, k) = extrapolated(pressure(i, j, k), pressure(i, j, k + 1), open(i, j, k + 1))
+              ibm%offer_up(i, j, k) = extrapolated(pressure(i, j, k), pressure(i, j, k - 1), open(i, j, k - 1))
+            end if
+          end do
+        end do
+      end do
+      call exchange_slab_halos(grid%slab, ibm%offer_down, ibm%offer_up)
+      do k = 1, nzl
+        if (.not. near_k(k)) cycle
+        do j = 1, ny
+          if (.not. near_j(j)) cycle
+          do i = 1, nx
+            if (.not. near_i(i)) cycle
+            if (open(i, j, k) > 0.5_wp) cycle
+            total = 0
+            count = 0
+            do d = 1, 4
+              associate (i1 => wrap(i + step_x(d), nx), j1 => wrap(j + step_y(d), ny), &
+                         i2 => wrap(i + 2 * step_x(d), nx), j2 => wrap(j + 2 * step_y(d), ny))
+                if (open(i1, j1, k) > 0.5_wp) then
+                  total = total + extrapolated(pressure(i1, j1, k), pressure(i2, j2, k), open(i2, j2, k))
+                  count = count + 1
+                end if
+              end associate
+            end do
+            if (open(i, j, k + 1) > 0.5_wp) then
+              total = total + ibm%offer_down(i, j, k + 1)
+              count = count + 1
+            end if
+            if (open(i, j, k - 1) > 0.5_wp) then
+              total = total + ibm%offer_up(i, j, k - 1)
+              count = count + 1
+            end if
+            if (count > 0) pressure(i, j, k) = total / count
+          end do
+        end do
+      end do
+    end associate
+    call exchange_slab_halos(grid%slab, pressure)
+  contains
+    !> 2 p1 - p2 when the cell beyond (p2) is open, else p1.
+    pure real(wp) function extrapolated(p1, p2, open2) result(value)
+      real(wp), intent(in) :: p1, p2, open2
+      if (open2 > 0.5_wp) then
+        value = 2.0_wp * p1 - p2
+      else
+        value = p1
+      end if
+    end function extrapolated
+    pure integer function wrap(i, n)
+      integer, intent(in) :: i, n
+      wrap = modulo(i - 1, n) + 1
+    end function wrap
+  end subroutine ibm_extend_pressure
+
+  !> The i, j (global) and k (local, 1..nz_local) indices within `margin` of a ghost or interior
+  !> node of any component on this rank (periodic in i and j).
+  subroutine near_ranges(ibm, grid, margin, near_i, near_j, near_k)
+    type(immersed_boundary_t), intent(in) :: ibm
+    type(fluid_grid_t), intent(in) :: grid
+    integer, intent(in) :: margin
+    logical, allocatable, intent(out) :: near_i(:), near_j(:), near_k(:)
+    logical, allocatable :: solid_i(:), solid_j(:), solid_k(:)
+    integer :: c, m, s
+    allocate(solid_i(grid%nx), solid_j(grid%ny), solid_k(grid%nz_local))
+    solid_i = .false.; solid_j = .false.; solid_k = .false.
+    do c = 1, 3
+      associate (nodes => ibm%geometry%component(c))
+        do m = 1, nodes%n_ghost
+          call mark(nodes%ghost(m)%node)
+        end do
+        do m = 1, nodes%n_interior
+          call mark(nodes%interior(:, m))
+        end do
+        ! Solid nodes of the neighbouring ranks' edge planes: this rank's edge cells feed their
+        ! sealed cells (cell_open, offers through the halo exchange).
+        call mark_plane(nodes%status(1:grid%nx, 1:grid%ny, 0), 1)
+        call mark_plane(nodes%status(1:grid%nx, 1:grid%ny, grid%nz_local + 1), grid%nz_local)
+      end associate
+    end do
+    allocate(near_i(grid%nx), near_j(grid%ny), near_k(grid%nz_local))
+    near_i = solid_i; near_j = solid_j; near_k = solid_k
+    do s = 1, margin
+      near_i = near_i .or. cshift(solid_i, s) .or. cshift(solid_i, -s)
+      near_j = near_j .or. cshift(solid_j, s) .or. cshift(solid_j, -s)
+      near_k(1 + s:) = near_k(1 + s:) .or. solid_k(:grid%nz_local - s)
+      near_k(:grid%nz_local - s) = near_k(:grid%nz_local - s) .or. solid_k(1 + s:)
+    end do
+  contains
+    subroutine mark(node)
+      integer, intent(in) :: node(3)
+      solid_i(node(1)) = .true.
+      solid_j(node(2)) = .true.
+      solid_k(node(3)) = .true.
+    end subroutine mark
+    subroutine mark_plane(status, k)
+      integer(int8), intent(in) :: status(:, :)
+      integer, intent(in) :: k
+      if (all(status == node_fluid)) return
+      solid_i = solid_i .or. any(status /= node_fluid, dim=2)
+      solid_j = solid_j .or. any(status /= node_fluid, dim=1)
+      solid_k(k) = .true.
+    end subroutine mark_plane
+  end subroutine near_ranges
 
   !> inertia_change += sign rho dV sum (u e_c and r x u e_c) over every body's ghost and interior nodes.
   subroutine add_body_momentum(ibm, grid, u, v, w, sign)

@@ -26,7 +26,8 @@ module immersed_scene
   use config_bodies, only: bodies_config_t
   use immersed_geometry, only: immersed_body_t, thin_dimension_cells
   use immersed_boundary, only: immersed_boundary_t, ibm_settings_t, imposition_report_t, ibm_set_bodies, &
-                               ibm_impose, ibm_begin_step, ibm_step_loads, cell_divergence_max
+                               ibm_impose, ibm_begin_step, ibm_step_loads, cell_divergence_max, ibm_extend_pressure, &
+                               status_change_summary
   implicit none
   private
   public :: prescribed_motion_t, immersed_scene_t, immersed_scene_create, immersed_step, motion_body, &
@@ -46,6 +47,7 @@ module immersed_scene
 
   type :: immersed_scene_t
     type(immersed_boundary_t) :: ibm
+    logical :: extend_pressure = .true.        !< ibm_extend_pressure after every step (moving bodies)
     type(prescribed_motion_t), allocatable :: motion(:)
     real(wp) :: driving_force(3) = 0           !< N/m^3, uniform body force on the whole box (mean pressure gradient)
     real(wp), allocatable :: force_u(:, :, :), force_v(:, :, :), force_w(:, :, :)   !< m/s^2, f / rho
@@ -145,6 +147,7 @@ contains
       scene%force = scene%momentum_force
       scene%torque = scene%momentum_torque
     end if
+    if (scene%extend_pressure) call ibm_extend_pressure(scene%ibm, solver%grid, solver%pressure)
     call timer_toc(scene%timer)
     call fluid_finish_step(solver)
   end subroutine immersed_step
@@ -299,5 +302,6 @@ contains
                     ' N; |T| momentum '//real_text(norm2(scene%momentum_torque(:, n)))//' N m, surface '// &
                     real_text(norm2(scene%surface_torque(:, n)))//' N m ('//trim(scene%load_method)//' written)')
     end do
+    if (scene%moving) call log_line(status_change_summary(scene%ibm%changes))
   end subroutine loads_close
 end module immersed_scene

@@ -25,7 +25,7 @@ module resolved_scene
                             forcing_driver_power_input, forcing_driver_write_checkpoint, forcing_driver_finish
   use flow_statistics_output, only: flow_output_t, flow_output_start, flow_output_due, flow_output_record, &
                                     flow_output_finish
-  use immersed_boundary, only: ibm_settings_t
+  use immersed_boundary, only: ibm_settings_t, status_change_summary
   use immersed_scene, only: immersed_scene_t, immersed_scene_create, immersed_step, motions_from_config, &
                             loads_open, loads_write, loads_close
   implicit none
@@ -100,6 +100,7 @@ contains
         if (with_bodies) call log_line('immersed boundary: sweeps '//int_text(bodies%predicted%sweeps)// &
             ', residual '//real_text(bodies%predicted%residual)//', slip after projection '// &
             real_text(bodies%projected%largest_change)//', cut-cell divergence '//real_text(bodies%divergence)//' 1/s')
+        if (with_bodies .and. bodies%moving) call log_line(status_change_summary(bodies%ibm%changes))
       end if
       if (solver%time >= next_field_time * (1.0_wp - 1.0e-12_wp) .and. solver%time < cfg%run%end_time) then
         call output_fields(solver)
@@ -133,9 +134,6 @@ contains
       call immersed_scene_create(bodies, solver, motions_from_config(cfg%bodies, solver%grid), settings, &
                                  cfg%bodies%driving_force, cfg%bodies%load_method, cfg%bodies%mesh_level)
       call loads_open(bodies, run_file('bodies_loads.dat'), append=cfg%run%restart, last_step=solver%step)
-      if (bodies%moving .and. solver%incremental_pressure) call log_line('immersed boundary: note: moving '// &
-          'bodies with &fluid pressure_scheme = ''incremental'' give force spikes when nodes are uncovered '// &
-          '(the pressure inside a body enters u*); ''non_incremental'' avoids them (docs/validation.md)')
       call log_line('immersed boundary: '//trim(cfg%scene%ibm_coupling)//' coupling, '// &
           int_text(cfg%bodies%count)//' bodies, loads every step in '//run_file('bodies_loads.dat'))
     end subroutine start_bodies

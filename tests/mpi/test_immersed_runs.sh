@@ -6,6 +6,11 @@
 #    largest load (round-off; the Jacobi ghost sweeps do not depend on the ranks), for both couplings;
 #  - the file has one row per body per step and the log names the sweeps and the residual;
 #  - a restart continues bodies_loads.dat bit for bit (rows after the checkpoint dropped);
+#  - a sphere crossing the periodic wrap in x and z (its centre wraps during the run) and, on 2
+#    ranks, the rank boundaries (ibm notes rung 9): its loads equal to round-off those of the same
+#    sphere 16 cells lower, which crosses no periodic boundary (the periodic grid is invariant under
+#    a shift by whole cells), and those of 2 ranks equal 1 rank's; the run logs its status changes
+#    and load jumps;
 #  - refused decks, before any step, with a message naming the variable: Crank-Nicolson diffusion
 #    with bodies, an unknown load_method, a disk thinner than 4 cells (the message gives the grid).
 # Prints PASS/FAIL lines; works in a temporary directory.
@@ -63,6 +68,52 @@ PY
     echo "FAIL immersed_runs/${coupling}_one_and_two_ranks_equal: a run failed: $(tail -n 3 ./*_$coupling.nml.out | head -c 400)"
   fi
 done
+
+# Rung 9: the same sphere, moving along x and z, centred 0.005 mm below the periodic wrap in x and
+# z ('wrap', its centre wraps at steps 25 and 13) or 16 cells lower in z ('shifted', crossing no
+# periodic boundary in z; on 2 ranks it crosses the rank boundary at z = L/2 instead).
+crossing() { # name, centre z
+  cat <<NML
+&run name = '$1', max_steps = 40, end_time = 1.0, dt = 4.0e-6, dt_mode = 'fixed', overwrite = .true.,
+     progress_interval = 20 /
+&scene fluid = 'resolved', particles = 'prescribed', ibm_coupling = 'implicit' /
+&grid nx = 32, ny = 32, nz = 32, length_x = 1.0e-3, length_y = 1.0e-3, length_z = 1.0e-3 /
+&fluid viscosity = 1.0e-6, viscous_scheme = 'explicit', init = 'rest', pressure_scheme = 'incremental' /
+&bodies count = 1, shape(1) = 'sphere', radius(1) = 1.6e-4, centre(:,1) = 0.995e-3, 0.52e-3, $2,
+  velocity(:,1) = 0.05, 0.0, 0.1 /
+&output directory = '$1', checkpoint_interval = 0, field_interval = 0.0 /
+NML
+}
+crossing wrap_one 0.995e-3 > wrap_one.nml
+crossing wrap_two 0.995e-3 > wrap_two.nml
+crossing shifted_one 0.495e-3 > shifted_one.nml
+if run 1 wrap_one.nml && run 2 wrap_two.nml && run 1 shifted_one.nml; then
+  for pair in "wrap_one shifted_one periodic_crossing_equals_shifted" "wrap_one wrap_two periodic_and_rank_crossing_two_ranks"; do
+    set -- $pair
+    if python3 - "$1/bodies_loads.dat" "$2/bodies_loads.dat" > cmp.txt 2>&1 <<'PY'
+import sys
+a = [l.split() for l in open(sys.argv[1]) if not l.startswith('#')]
+b = [l.split() for l in open(sys.argv[2]) if not l.startswith('#')]
+assert len(a) == len(b) == 40, f'rows {len(a)} {len(b)}'
+scale = max(abs(float(x)) for r in a for x in r[3:9])
+worst = max(abs(float(x) - float(y)) for r, s in zip(a, b) for x, y in zip(r[3:9], s[3:9]))
+assert scale > 0 and worst <= 1e-10 * scale, f'worst {worst:.3e} scale {scale:.3e}'
+print(f'worst difference {worst:.2e} of largest load {scale:.2e}')
+PY
+    then
+      echo "PASS immersed_runs/$3  ($(cat cmp.txt))"
+    else
+      echo "FAIL immersed_runs/$3: $(head -c 400 cmp.txt)"
+    fi
+  done
+  if grep -q 'status changes: [1-9][0-9]* nodes uncovered' wrap_two/agglo.log; then
+    echo "PASS immersed_runs/crossing_logs_status_changes  ($(grep 'status changes' wrap_two/agglo.log | tail -n 1 | head -c 300))"
+  else
+    echo "FAIL immersed_runs/crossing_logs_status_changes: no status-change line with uncovered nodes in the log"
+  fi
+else
+  echo "FAIL immersed_runs/periodic_crossing_equals_shifted: a run failed: $(tail -n 3 wrap_*.nml.out shifted_one.nml.out | head -c 400)"
+fi
 
 refused() { # test name, deck file, expected text in the message
   if run 1 "$2"; then
