@@ -38,7 +38,7 @@ module immersed_geometry
   implicit none
   private
   public :: immersed_body_t, immersed_options_t, ghost_node_t, component_nodes_t, immersed_geometry_t
-  public :: classify_nodes, node_position, thin_dimension_cells
+  public :: classify_nodes, node_position, thin_dimension_cells, fallback_count
   public :: node_fluid, node_ghost, node_interior
 
   integer(int8), parameter :: node_fluid = 0_int8, node_ghost = 1_int8, node_interior = 2_int8
@@ -127,6 +127,13 @@ contains
       x(3) = z_face(grid, k)
     end select
   end function node_position
+
+  !> Ghost nodes of this rank (all three components) whose image point was moved back because its
+  !> segment entered another body (the fallback of the module header; overlaps included).
+  pure integer function fallback_count(geometry)
+    type(immersed_geometry_t), intent(in) :: geometry
+    fallback_count = sum(geometry%component(:)%n_fallback)
+  end function fallback_count
 
   !> Thinnest dimension of a body (2 min(a, b)) in cells of the largest grid spacing: the ghost
   !> layers of two opposite faces overlap when it is small (the disk of r = 50 um, aspect 5, is 2.2
