@@ -22,7 +22,8 @@ module resolved_scene
   use fluid_restart, only: write_fluid_checkpoint, read_fluid_checkpoint, write_fluid_snapshot, read_initial_field
   use fluid_monitor, only: statistics_open, statistics_write, statistics_close, progress_line, timing_report
   use forcing_driver, only: forcing_driver_t, forcing_driver_start, forced_fluid_advance, &
-                            forcing_driver_power_input, forcing_driver_write_checkpoint, forcing_driver_finish
+                            forcing_driver_power_input, forcing_driver_write_checkpoint, forcing_driver_finish, &
+                            forcing_driver_evaluate, forcing_driver_advance
   use flow_statistics_output, only: flow_output_t, flow_output_start, flow_output_due, flow_output_record, &
                                     flow_output_finish
   use parallel_env, only: global_sum
@@ -83,8 +84,15 @@ contains
     do while (solver%time < cfg%run%end_time .and. solver%step < cfg%run%max_steps)
       dt = next_time_step(cfg%run%dt_mode, cfg%run%dt, cfg%run%cfl_target, rate, viscous_limit, solver%time, &
                           cfg%run%end_time)
-      if (with_bodies) then
+      if (with_bodies .and. forcing%active) then
+        ! The Eswaran-Pope f^n with the bodies' drive in the predictor, then f^{n+1} (forced_fluid_advance's order).
+        call forcing_driver_evaluate(forcing)
+        call immersed_step(bodies, solver, dt, forcing%fx, forcing%fy, forcing%fz)
+        call forcing_driver_advance(forcing, dt)
+      else if (with_bodies) then
         call immersed_step(bodies, solver, dt)
+      end if
+      if (with_bodies) then
         call loads_write(bodies, solver%step, solver%time)
         call count_fallbacks()
       else
