@@ -98,6 +98,7 @@ module immersed_geometry
     integer :: k_first = 0                              !< lowest extended local plane of owner
     integer, allocatable :: owner(:, :, :)              !< (nx, ny, k_first:) body containing the node, else 0
     integer(int8), allocatable :: status(:, :, :)       !< (nx, ny, k_first + 1:) node_fluid/ghost/interior
+    integer, allocatable :: ghost_index(:, :, :)        !< (nx, ny, nz_local) index in the ghost list, else 0
     !> the index sets each body's bounding box marked in owner, (nx | ny | planes, n_bodies)
     logical, allocatable :: marked_x(:, :), marked_y(:, :), marked_z(:, :)
   end type classification_work_t
@@ -209,7 +210,7 @@ contains
     integer, intent(in) :: component
     type(classification_work_t), intent(inout) :: work
     type(component_nodes_t), intent(inout) :: nodes
-    integer, allocatable :: ghost_nodes(:, :), list_x(:), list_y(:), list_z(:), box_x(:), box_y(:)
+    integer, allocatable :: list_x(:), list_y(:), list_z(:), box_x(:), box_y(:)
     logical, allocatable :: near_x(:), near_y(:), near_z(:)
     integer :: reach, k_lo, k_hi, i, j, k, ii, jj, kk, n_ghost, n_interior, g, n
     real(wp) :: h_max, h_min, image_cells
@@ -265,8 +266,7 @@ contains
 
       call clear_field_status(grid, nodes)
 
-      ! Lists of this rank's ghost and interior nodes, in storage order (k, then j, then i), which
-      ! find_ghost relies on.
+      ! Lists of this rank's ghost and interior nodes, in storage order (k, then j, then i).
       nodes%component = component
       if (allocated(nodes%ghost)) then
         if (size(nodes%ghost) /= n_ghost) deallocate(nodes%ghost)
@@ -302,16 +302,19 @@ contains
       nodes%n_fallback = 0
       nodes%n_overlap = 0
       nodes%halo_planes_needed = 0
-      allocate(ghost_nodes(3, nodes%n_ghost))
+      ! The ghost list's index of each local ghost node, for the stencils' ghost links (zeroed after).
       do g = 1, nodes%n_ghost
-        ghost_nodes(:, g) = nodes%ghost(g)%node
+        work%ghost_index(nodes%ghost(g)%node(1), nodes%ghost(g)%node(2), nodes%ghost(g)%node(3)) = g
       end do
       do g = 1, nodes%n_ghost
-        call build_ghost_record(grid, bodies, options, component, status, k_lo, ghost_nodes, nodes%ghost(g))
+        call build_ghost_record(grid, bodies, options, component, status, k_lo, work%ghost_index, nodes%ghost(g))
         if (nodes%ghost(g)%fallback) nodes%n_fallback = nodes%n_fallback + 1
         if (nodes%ghost(g)%fallback .and. nodes%ghost(g)%image_distance <= 0.0_wp) nodes%n_overlap = nodes%n_overlap + 1
         k = nodes%ghost(g)%node(3) + nodes%ghost(g)%lower_offset(3)
         nodes%halo_planes_needed = max(nodes%halo_planes_needed, 1 - k, k + 1 - grid%nz_local)
+      end do
+      do g = 1, nodes%n_ghost
+        work%ghost_index(nodes%ghost(g)%node(1), nodes%ghost(g)%node(2), nodes%ghost(g)%node(3)) = 0
       end do
     end associate
     call clear_marked(work, size(bodies))
@@ -328,10 +331,12 @@ contains
     if (fits) fits = size(work%owner, 1) == grid%nx .and. size(work%owner, 2) == grid%ny .and. &
                      lbound(work%owner, 3) == k_first .and. ubound(work%owner, 3) == k_last
     if (.not. fits) then
-      if (allocated(work%owner)) deallocate(work%owner, work%status)
+      if (allocated(work%owner)) deallocate(work%owner, work%status, work%ghost_index)
       allocate(work%owner(grid%nx, grid%ny, k_first:k_last), work%status(grid%nx, grid%ny, k_first + 1:k_last - 1))
+      allocate(work%ghost_index(grid%nx, grid%ny, grid%nz_local))
       work%owner = 0
       work%status = node_fluid
+      work%ghost_index = 0
       work%k_first = k_first
     end if
     if (allocated(work%marked_x)) then
@@ -433,35 +438,6 @@ contains
     end do
   end subroutine set_with_ring
 
-  !> Index in the ghost list (ghost_nodes(:, g) = i, j, k of ghost g) of node (i, j, k) (k local), 0 if
-  !> it is not in the list: binary search, the list being in storage order.
-  pure integer function find_ghost(ghost_nodes, nx, ny, i, j, k)
-    integer, intent(in) :: ghost_nodes(:, :)
-    integer, intent(in) :: nx, ny, i, j, k
-    integer :: lo, hi, mid, key, mid_key
-    key = storage_key(i, j, k)
-    lo = 1
-    hi = size(ghost_nodes, 2)
-    find_ghost = 0
-    do while (lo <= hi)
-      mid = (lo + hi) / 2
-      mid_key = storage_key(ghost_nodes(1, mid), ghost_nodes(2, mid), ghost_nodes(3, mid))
-      if (mid_key == key) then
-        find_ghost = mid
-        return
-      else if (mid_key < key) then
-        lo = mid + 1
-      else
-        hi = mid - 1
-      end if
-    end do
-  contains
-    pure integer function storage_key(i, j, k)
-      integer, intent(in) :: i, j, k
-      storage_key = ((k - 1) * ny + (j - 1)) * nx + i
-    end function storage_key
-  end function find_ghost
-
   !> work%owner(i, j, k) = index of the body that contains node (i, j, k) (k local, extended), else
   !> 0 (zero on entry). Only the nodes within each body's lab bounding box are tested; the box's
   !> index sets go to work%marked_* (for clear_marked) and their union to near_*.
@@ -532,13 +508,13 @@ contains
 
   !> Closest point, normal, image point (with the other-body fallback) and trilinear stencil of
   !> one ghost node. status covers (1:nx, 1:ny, k_lo:) in extended local k.
-  subroutine build_ghost_record(grid, bodies, options, component, status, k_lo, ghost_nodes, ghost)
+  subroutine build_ghost_record(grid, bodies, options, component, status, k_lo, ghost_index, ghost)
     type(fluid_grid_t), intent(in) :: grid
     type(immersed_body_t), intent(in) :: bodies(:)
     type(immersed_options_t), intent(in) :: options
     integer, intent(in) :: component, k_lo
     integer(int8), intent(in) :: status(:, :, k_lo:)
-    integer, intent(in) :: ghost_nodes(:, :)     !< i, j, k of this rank's ghosts (for the stencil's ghost links)
+    integer, intent(in) :: ghost_index(:, :, :)  !< (nx, ny, nz_local) index of each local ghost node, else 0
     type(ghost_node_t), intent(inout) :: ghost
     type(surface_projection_t) :: projection
     real(wp) :: box(3), spacing(3), centre(3), nearest_entry, fraction(3), t(3), w(0:1, 3)
@@ -598,8 +574,7 @@ contains
       ghost%stencil_local(corner) = node(3) >= 1 .and. node(3) <= grid%nz_local
       ghost%stencil_ghost(corner) = 0
       if (ghost%stencil_local(corner) .and. ghost%stencil_status(corner) == node_ghost) &
-        ghost%stencil_ghost(corner) = find_ghost(ghost_nodes, grid%nx, grid%ny, ghost%stencil(1, corner), &
-                                                 ghost%stencil(2, corner), node(3))
+        ghost%stencil_ghost(corner) = ghost_index(ghost%stencil(1, corner), ghost%stencil(2, corner), node(3))
       if (all(bits + ghost%lower_offset == 0)) ghost%self_corner = corner
     end do
   end subroutine build_ghost_record
