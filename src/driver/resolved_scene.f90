@@ -84,17 +84,8 @@ contains
     do while (solver%time < cfg%run%end_time .and. solver%step < cfg%run%max_steps)
       dt = next_time_step(cfg%run%dt_mode, cfg%run%dt, cfg%run%cfl_target, rate, viscous_limit, solver%time, &
                           cfg%run%end_time)
-      if (with_bodies .and. forcing%active) then
-        ! The Eswaran-Pope f^n with the bodies' drive in the predictor, then f^{n+1} (forced_fluid_advance's order).
-        call forcing_driver_evaluate(forcing)
-        call immersed_step(bodies, solver, dt, forcing%fx, forcing%fy, forcing%fz)
-        call forcing_driver_advance(forcing, dt)
-      else if (with_bodies) then
-        call immersed_step(bodies, solver, dt)
-      end if
       if (with_bodies) then
-        call loads_write(bodies, solver%step, solver%time)
-        call count_fallbacks()
+        call bodies_step(dt)
       else
         call forced_fluid_advance(forcing, solver, dt)   ! fluid_advance with the body force f^n, then f^n+1
       end if
@@ -161,6 +152,22 @@ contains
       call log_line('immersed boundary: '//trim(cfg%scene%ibm_coupling)//' coupling, '// &
           int_text(cfg%bodies%count)//' bodies, loads every step in '//run_file('bodies_loads.dat'))
     end subroutine start_bodies
+
+    !> One step with the bodies (immersed_step), their loads and fallbacks. With the forcing on, its
+    !> f^n goes into the predictor with the drive and the OU processes advance after the step, in
+    !> forced_fluid_advance's order.
+    subroutine bodies_step(dt)
+      real(wp), intent(in) :: dt
+      if (forcing%active) then
+        call forcing_driver_evaluate(forcing)
+        call immersed_step(bodies, solver, dt, forcing%fx, forcing%fy, forcing%fz)
+        call forcing_driver_advance(forcing, dt)
+      else
+        call immersed_step(bodies, solver, dt)
+      end if
+      call loads_write(bodies, solver%step, solver%time)
+      call count_fallbacks()
+    end subroutine bodies_step
 
     !> This step's image-point fallbacks over all ranks (collective), added to the run's tally; the
     !> first step with any is named in the log.
