@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Agglo benchmark (`make bench`): fluid time per step and its parts at 64^3 and 128^3 on 1 and 2
 # ranks, and the Poisson solve against one forward + inverse 3-D FFT of the same grid; the staged
-# step against the fused one with each stage against the memory-bandwidth floor (BENCH_PARTS=stages).
+# step against the fused one with each stage against the memory-bandwidth floor (BENCH_PARTS=stages);
+# the coupled step with immersed bodies against the fluid-only step, by part and against the number
+# of bodies (BENCH_PARTS=immersed).
 # Medians over repetitions (the machine may be shared: compare ratios; poisson = the in-buffer solve
 # the step uses, pois(copy) = the poisson_solve API with its copies in and out). Results: docs/performance.md.
 set -eu
@@ -9,19 +11,20 @@ cd "$(dirname "$0")/.."
 BUILD=${BUILD:-build}
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 make --no-print-directory -s build "$BUILD/bench/bench_fluid" "$BUILD/bench/bench_pair" \
-  "$BUILD/bench/bench_forcing" "$BUILD/bench/bench_stages"
+  "$BUILD/bench/bench_forcing" "$BUILD/bench/bench_stages" "$BUILD/bench/bench_immersed"
 BUILD=$(cd "$BUILD" && pwd -P)   # absolute from here on: the programs run from a work directory
 work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
 exe=$BUILD/bench/bench_fluid
 pair_exe=$BUILD/bench/bench_pair
 forcing_exe=$BUILD/bench/bench_forcing
 stages_exe=$BUILD/bench/bench_stages
+immersed_exe=$BUILD/bench/bench_immersed
 agglo=$BUILD/agglo
-parts=${BENCH_PARTS:-fluid stages pair forcing}   # e.g. BENCH_PARTS=pair make bench
+parts=${BENCH_PARTS:-fluid stages pair forcing immersed}   # e.g. BENCH_PARTS=pair make bench
 echo "Agglo fluid benchmark on $(nproc) cores: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')"
 echo "compiler: $(mpifort --version | head -n 1); flags: $(cat "$BUILD/flags.txt" 2>/dev/null); FFTW_ESTIMATE plans"
-echo "    N  R  fft_pair   poisson      step  adv+diff   proj(P)      halo    io(4f) pois(copy)  [ms, medians]  ns/pt/step  poisson/fft  step/fft"
 if [[ $parts == *fluid* ]]; then
+echo "    N  R  fft_pair   poisson      step  adv+diff   proj(P)      halo    io(4f) pois(copy)  [ms, medians]  ns/pt/step  poisson/fft  step/fft"
 for n in 64 128; do
   steps=$(( n == 64 ? 40 : 15 ))
   for ranks in 1 2; do
@@ -56,6 +59,24 @@ if [[ $parts == *forcing* ]]; then
       echo "         $(cd "$work" && mpirun -np $ranks "$forcing_exe" $n $(( n == 64 ? 20 : 5 )) | tail -n 1)"
     done
   done
+fi
+
+# Immersed bodies in prescribed motion (the paper's needle and disk, moving and rotating: reclassified
+# every step; explicit diffusion): the coupled step against the fluid-only step (target <= 1.3x,
+# docs/performance.md), by part, for both couplings, 1 and 2 ranks; then against the number of
+# bodies. Medians over 10 (128^3) or 20 (64^3) repetitions, slowest rank; on 1 rank the process's
+# CPU time (robust on a shared machine), on 2 ranks the wall time.
+if [[ $parts == *immersed* ]]; then
+  echo
+  echo "Immersed:  N  R  B  coupling    fluid  coupled    ratio  reclass impose*  impose  loads     div    fluid  [ms, medians]"
+  for coupling in implicit explicit; do
+    (cd "$work" && mpirun -np 1 "$immersed_exe" 128 10 2 $coupling cpu)
+    (cd "$work" && mpirun -np 2 "$immersed_exe" 128 10 2 $coupling wall)
+  done
+  for bodies in 1 4 8; do
+    (cd "$work" && mpirun -np 1 "$immersed_exe" 128 10 $bodies implicit cpu)
+  done
+  (cd "$work" && mpirun -np 1 "$immersed_exe" 64 20 2 implicit cpu)
 fi
 
 [[ $parts == *pair* ]] || exit 0

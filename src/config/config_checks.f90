@@ -127,7 +127,7 @@ contains
         ' m) apart (the minimum-image convention of the periodic box)')
   end subroutine check_pair_in_box
 
-  !> Bodies in prescribed motion: resolved fluid, explicit diffusion, no Eswaran-Pope forcing.
+  !> Bodies in prescribed motion: resolved fluid, explicit diffusion (the Eswaran-Pope forcing may drive the box).
   subroutine check_prescribed_cross(cfg)
     type(agglo_config_t), intent(in) :: cfg
     if (cfg%scene%fluid /= 'resolved') call input_error('scene', 'particles', '''prescribed'' with fluid = '''// &
@@ -135,8 +135,6 @@ contains
     if (cfg%fluid%viscous_scheme == 'crank_nicolson') call input_error('fluid', 'viscous_scheme', &
         '''crank_nicolson'' with &scene particles = ''prescribed''', '''explicit'' (the Crank-Nicolson '// &
         'predictor with the immersed-boundary ghost rows is not available yet)')
-    if (cfg%scene%forcing /= 'none') call input_error('scene', 'forcing', ''''//trim(cfg%scene%forcing)// &
-        ''' with particles = ''prescribed''', '''none'' (drive the flow with &bodies driving_force)')
   end subroutine check_prescribed_cross
 
   !> Resolved fluid: the grid must split into equal slabs along z and y (pencil transposes of the FFT).

@@ -40,7 +40,7 @@ module immersed_geometry
   implicit none
   private
   public :: immersed_body_t, immersed_options_t, ghost_node_t, component_nodes_t, immersed_geometry_t
-  public :: classify_nodes, node_position, thin_dimension_cells
+  public :: classify_nodes, node_position, thin_dimension_cells, fallback_count
   public :: node_fluid, node_ghost, node_interior
 
   integer(int8), parameter :: node_fluid = 0_int8, node_ghost = 1_int8, node_interior = 2_int8
@@ -95,10 +95,23 @@ module immersed_geometry
     integer :: halo_planes_needed = 0              !< planes beyond this rank's slab that the stencils reach
   end type component_nodes_t
 
+  !> Work arrays of the classification, kept between calls so that a reclassification (every step
+  !> of a moving body) neither allocates nor sweeps the whole slab: between calls every entry is
+  !> zero (fluid), and after each component only the boxes the bodies marked are zeroed again.
+  type :: classification_work_t
+    integer :: k_first = 0                              !< lowest extended local plane of owner
+    integer, allocatable :: owner(:, :, :)              !< (nx, ny, k_first:) body containing the node, else 0
+    integer(int8), allocatable :: status(:, :, :)       !< (nx, ny, k_first + 1:) node_fluid/ghost/interior
+    integer, allocatable :: ghost_index(:, :, :)        !< (nx, ny, nz_local) index in the ghost list, else 0
+    !> the index sets each body's bounding box marked in owner, (nx | ny | planes, n_bodies)
+    logical, allocatable :: marked_x(:, :), marked_y(:, :), marked_z(:, :)
+  end type classification_work_t
+
   !> The immersed-boundary geometry of all bodies on this rank.
   type :: immersed_geometry_t
     integer :: n_bodies = 0
     type(component_nodes_t) :: component(3)
+    type(classification_work_t) :: work                 !< reused by every classification
   end type immersed_geometry_t
 
 contains
@@ -120,6 +133,13 @@ contains
     end select
   end function node_position
 
+  !> Ghost nodes of this rank (all three components) whose image point was moved back because its
+  !> segment entered another body (the fallback of the module header; overlaps included).
+  pure integer function fallback_count(geometry)
+    type(immersed_geometry_t), intent(in) :: geometry
+    fallback_count = sum(geometry%component(:)%n_fallback)
+  end function fallback_count
+
   !> Thinnest dimension of a body (2 min(a, b)) in cells of the largest grid spacing: the ghost
   !> layers of two opposite faces overlap when it is small (the disk of r = 50 um, aspect 5, is 2.2
   !> cells thick at 64^3 in a 1 mm box).
@@ -140,7 +160,7 @@ contains
     call check_inputs(grid, bodies, options)
     geometry%n_bodies = size(bodies)
     do component = 1, 3
-      call classify_component(grid, bodies, options, component, geometry%component(component))
+      call classify_component(grid, bodies, options, component, geometry%work, geometry%component(component))
     end do
   end subroutine classify_nodes
 
@@ -187,16 +207,16 @@ contains
     end do
   end function lab_half_extent
 
-  subroutine classify_component(grid, bodies, options, component, nodes)
+  subroutine classify_component(grid, bodies, options, component, work, nodes)
     type(fluid_grid_t), intent(in) :: grid
     type(immersed_body_t), intent(in) :: bodies(:)
     type(immersed_options_t), intent(in) :: options
     integer, intent(in) :: component
+    type(classification_work_t), intent(inout) :: work
     type(component_nodes_t), intent(inout) :: nodes
-    integer, allocatable :: owner(:, :, :), ghost_nodes(:, :)
-    integer(int8), allocatable :: status(:, :, :)
+    integer, allocatable :: list_x(:), list_y(:), list_z(:), box_x(:), box_y(:)
     logical, allocatable :: near_x(:), near_y(:), near_z(:)
-    integer :: reach, k_lo, k_hi, i, j, k, n_ghost, n_interior, g
+    integer :: reach, k_lo, k_hi, i, j, k, ii, jj, kk, n_ghost, n_interior, g, n
     real(wp) :: h_max, h_min, image_cells
 
     ! Planes beyond the slab that the stencils can reach: d_G <= h_max (a fluid neighbour lies one
@@ -211,197 +231,297 @@ contains
 
     ! Solid owner on the planes the ghost test of every stencil node needs (one more each side);
     ! near_* mark the indices within some body's bounding box: only there can a node be solid.
-    allocate(owner(grid%nx, grid%ny, k_lo - 1:k_hi + 1))
+    call prepare_work(work, grid, size(bodies), k_lo - 1, k_hi + 1)
     allocate(near_x(grid%nx), near_y(grid%ny), near_z(k_lo - 1:k_hi + 1))
-    call mark_solid_nodes(grid, bodies, component, k_lo - 1, owner, near_x, near_y, near_z)
+    call mark_solid_nodes(grid, bodies, component, work, near_x, near_y, near_z)
 
-    allocate(status(grid%nx, grid%ny, k_lo:k_hi))
-    status = node_fluid
-    do k = k_lo, k_hi
-      if (.not. near_z(k)) cycle
-      do j = 1, grid%ny
-        if (.not. near_y(j)) cycle
-        do i = 1, grid%nx
-          if (owner(i, j, k) == 0) cycle
-          if (owner(wrap(i - 1, grid%nx), j, k) == 0 .or. owner(wrap(i + 1, grid%nx), j, k) == 0 .or. &
-              owner(i, wrap(j - 1, grid%ny), k) == 0 .or. owner(i, wrap(j + 1, grid%ny), k) == 0 .or. &
-              owner(i, j, k - 1) == 0 .or. owner(i, j, k + 1) == 0) then
-            status(i, j, k) = node_ghost
-          else
-            status(i, j, k) = node_interior
-          end if
-        end do
-      end do
-    end do
-
-    ! Field-layout copy (halo ring included) for the callers' loops.
-    nodes%component = component
-    if (allocated(nodes%status)) deallocate(nodes%status)
-    allocate(nodes%status(0:grid%nx + 1, 0:grid%ny + 1, 0:grid%nz_local + 1))
-    nodes%status(1:grid%nx, 1:grid%ny, :) = status(:, :, 0:grid%nz_local + 1)
-    nodes%status(0, 1:grid%ny, :) = nodes%status(grid%nx, 1:grid%ny, :)
-    nodes%status(grid%nx + 1, 1:grid%ny, :) = nodes%status(1, 1:grid%ny, :)
-    nodes%status(:, 0, :) = nodes%status(:, grid%ny, :)
-    nodes%status(:, grid%ny + 1, :) = nodes%status(:, 1, :)
-
-    ! Lists of this rank's ghost and interior nodes, in storage order (k, then j, then i), which
-    ! find_ghost relies on.
-    n_ghost = 0
-    n_interior = 0
-    do k = 1, grid%nz_local
-      if (.not. near_z(k)) cycle
-      n_ghost = n_ghost + count(status(:, :, k) == node_ghost)
-      n_interior = n_interior + count(status(:, :, k) == node_interior)
-    end do
-    if (allocated(nodes%ghost)) deallocate(nodes%ghost)
-    if (allocated(nodes%interior)) deallocate(nodes%interior)
-    if (allocated(nodes%interior_body)) deallocate(nodes%interior_body)
-    allocate(nodes%ghost(n_ghost), nodes%interior(3, n_interior), nodes%interior_body(n_interior))
-    nodes%n_ghost = 0
-    nodes%n_interior = 0
-    do k = 1, grid%nz_local
-      if (.not. near_z(k)) cycle
-      do j = 1, grid%ny
-        if (.not. near_y(j)) cycle
-        do i = 1, grid%nx
-          select case (status(i, j, k))
-          case (node_ghost)
-            nodes%n_ghost = nodes%n_ghost + 1
-            nodes%ghost(nodes%n_ghost)%node = [i, j, k]
-            nodes%ghost(nodes%n_ghost)%body = owner(i, j, k)
-          case (node_interior)
-            nodes%n_interior = nodes%n_interior + 1
-            nodes%interior(:, nodes%n_interior) = [i, j, k]
-            nodes%interior_body(nodes%n_interior) = owner(i, j, k)
-          end select
-        end do
-      end do
-    end do
-
-    nodes%n_fallback = 0
-    nodes%n_overlap = 0
-    nodes%halo_planes_needed = 0
-    allocate(ghost_nodes(3, nodes%n_ghost))
-    do g = 1, nodes%n_ghost
-      ghost_nodes(:, g) = nodes%ghost(g)%node
-    end do
-    do g = 1, nodes%n_ghost
-      call build_ghost_record(grid, bodies, options, component, status, k_lo, ghost_nodes, nodes%ghost(g))
-      if (nodes%ghost(g)%fallback) nodes%n_fallback = nodes%n_fallback + 1
-      if (nodes%ghost(g)%fallback .and. nodes%ghost(g)%image_distance <= 0.0_wp) nodes%n_overlap = nodes%n_overlap + 1
-      k = nodes%ghost(g)%node(3) + nodes%ghost(g)%lower_offset(3)
-      nodes%halo_planes_needed = max(nodes%halo_planes_needed, 1 - k, k + 1 - grid%nz_local)
-    end do
-  end subroutine classify_component
-
-  !> Index in the ghost list (ghost_nodes(:, g) = i, j, k of ghost g) of node (i, j, k) (k local), 0 if
-  !> it is not in the list: binary search, the list being in storage order.
-  pure integer function find_ghost(ghost_nodes, nx, ny, i, j, k)
-    integer, intent(in) :: ghost_nodes(:, :)
-    integer, intent(in) :: nx, ny, i, j, k
-    integer :: lo, hi, mid, key, mid_key
-    key = storage_key(i, j, k)
-    lo = 1
-    hi = size(ghost_nodes, 2)
-    find_ghost = 0
-    do while (lo <= hi)
-      mid = (lo + hi) / 2
-      mid_key = storage_key(ghost_nodes(1, mid), ghost_nodes(2, mid), ghost_nodes(3, mid))
-      if (mid_key == key) then
-        find_ghost = mid
-        return
-      else if (mid_key < key) then
-        lo = mid + 1
-      else
-        hi = mid - 1
-      end if
-    end do
-  contains
-    pure integer function storage_key(i, j, k)
-      integer, intent(in) :: i, j, k
-      storage_key = ((k - 1) * ny + (j - 1)) * nx + i
-    end function storage_key
-  end function find_ghost
-
-  !> owner(i, j, k) = index of the body that contains node (i, j, k) (k local, extended), else 0.
-  !> Only the nodes within each body's lab bounding box are tested.
-  subroutine mark_solid_nodes(grid, bodies, component, k_first, owner, near_x, near_y, near_z)
-    type(fluid_grid_t), intent(in) :: grid
-    type(immersed_body_t), intent(in) :: bodies(:)
-    integer, intent(in) :: component, k_first
-    integer, intent(inout) :: owner(:, :, k_first:)
-    logical, intent(out) :: near_x(:), near_y(:), near_z(k_first:)
-    integer :: n, i, j, k, previous
-    real(wp) :: box(3), extent(3), x(3), d(3), d_previous, d_new, rotation(3, 3)
-    logical, allocatable :: in_x(:), in_y(:)
-    real(wp), allocatable :: sep_x(:), sep_y(:)
-    type(surface_projection_t) :: p_new, p_old
-
-    box = [grid%lx, grid%ly, grid%lz]
-    owner = 0
-    near_x = .false.
-    near_y = .false.
-    near_z = .false.
-    allocate(in_x(grid%nx), in_y(grid%ny), sep_x(grid%nx), sep_y(grid%ny))
-    do n = 1, size(bodies)
-      extent = lab_half_extent(bodies(n))
-      rotation = rotation_matrix(bodies(n)%orientation)
-      do i = 1, grid%nx
-        x = node_position(grid, component, i, 1, 1)
-        sep_x(i) = minimum_image(x(1) - bodies(n)%centre(1), box(1))
-        in_x(i) = abs(sep_x(i)) <= extent(1)
-        near_x(i) = near_x(i) .or. in_x(i)
-      end do
-      do j = 1, grid%ny
-        x = node_position(grid, component, 1, j, 1)
-        sep_y(j) = minimum_image(x(2) - bodies(n)%centre(2), box(2))
-        in_y(j) = abs(sep_y(j)) <= extent(2)
-        near_y(j) = near_y(j) .or. in_y(j)
-      end do
-      do k = k_first, ubound(owner, 3)
-        x = node_position(grid, component, 1, 1, k)
-        d(3) = minimum_image(x(3) - bodies(n)%centre(3), box(3))
-        if (abs(d(3)) > extent(3)) cycle
-        near_z(k) = .true.
-        do j = 1, grid%ny
-          if (.not. in_y(j)) cycle
-          d(2) = sep_y(j)
-          do i = 1, grid%nx
-            if (.not. in_x(i)) cycle
-            d(1) = sep_x(i)
-            ! Inside test on the body-frame point R^T d.
-            if (.not. (implicit_function(bodies(n)%shape, matmul(d, rotation)) < 0.0_wp)) cycle
-            if (bodies(n)%mesh%level >= 0) then   ! the mesh lies inside the spheroid
-              if (.not. mesh_contains(bodies(n)%mesh, matmul(d, rotation))) cycle
-            end if
-            previous = owner(i, j, k)
-            if (previous == 0) then
-              owner(i, j, k) = n
-            else
-              ! Inside two (overlapping) bodies: the one whose surface is nearer.
-              p_new = body_closest_point(bodies(n)%shape, rotate_to_body(bodies(n)%orientation, d))
-              x = node_position(grid, component, i, j, k)
-              p_old = body_closest_point(bodies(previous)%shape, rotate_to_body(bodies(previous)%orientation, &
-                                         minimum_image(x - bodies(previous)%centre, box)))
-              d_new = abs(p_new%signed_distance)
-              d_previous = abs(p_old%signed_distance)
-              if (d_new < d_previous) owner(i, j, k) = n
-            end if
+    ! The indices within some box, ascending (the loops below keep the storage order).
+    list_x = pack([(i, i = 1, grid%nx)], near_x)
+    list_y = pack([(j, j = 1, grid%ny)], near_y)
+    list_z = pack([(k, k = k_lo, k_hi)], near_z(k_lo:k_hi))
+    associate (owner => work%owner, status => work%status)
+      ! status is node_fluid everywhere on entry (work's invariant); solid nodes only in the boxes,
+      ! each visited once, in its owner's box. The counts are of this rank's planes.
+      n_ghost = 0
+      n_interior = 0
+      do n = 1, size(bodies)
+        box_x = pack([(i, i = 1, grid%nx)], work%marked_x(:, n))
+        box_y = pack([(j, j = 1, grid%ny)], work%marked_y(:, n))
+        do k = k_lo, k_hi
+          if (.not. work%marked_z(k, n)) cycle
+          do jj = 1, size(box_y)
+            j = box_y(jj)
+            do ii = 1, size(box_x)
+              i = box_x(ii)
+              if (owner(i, j, k) /= n) cycle
+              if (owner(wrap(i - 1, grid%nx), j, k) == 0 .or. owner(wrap(i + 1, grid%nx), j, k) == 0 .or. &
+                  owner(i, wrap(j - 1, grid%ny), k) == 0 .or. owner(i, wrap(j + 1, grid%ny), k) == 0 .or. &
+                  owner(i, j, k - 1) == 0 .or. owner(i, j, k + 1) == 0) then
+                status(i, j, k) = node_ghost
+                if (k >= 1 .and. k <= grid%nz_local) n_ghost = n_ghost + 1
+              else
+                status(i, j, k) = node_interior
+                if (k >= 1 .and. k <= grid%nz_local) n_interior = n_interior + 1
+              end if
+            end do
           end do
         end do
       end do
+
+      call clear_field_status(grid, nodes)
+
+      ! Lists of this rank's ghost and interior nodes, in storage order (k, then j, then i).
+      nodes%component = component
+      if (allocated(nodes%ghost)) then
+        if (size(nodes%ghost) /= n_ghost) deallocate(nodes%ghost)
+      end if
+      if (allocated(nodes%interior)) then
+        if (size(nodes%interior, 2) /= n_interior) deallocate(nodes%interior, nodes%interior_body)
+      end if
+      if (.not. allocated(nodes%ghost)) allocate(nodes%ghost(n_ghost))
+      if (.not. allocated(nodes%interior)) allocate(nodes%interior(3, n_interior), nodes%interior_body(n_interior))
+      nodes%n_ghost = 0
+      nodes%n_interior = 0
+      do kk = 1, size(list_z)
+        k = list_z(kk)
+        if (k < 1 .or. k > grid%nz_local) cycle
+        do jj = 1, size(list_y)
+          j = list_y(jj)
+          do ii = 1, size(list_x)
+            i = list_x(ii)
+            select case (status(i, j, k))
+            case (node_ghost)
+              nodes%n_ghost = nodes%n_ghost + 1
+              nodes%ghost(nodes%n_ghost) = ghost_node_t(node=[i, j, k], body=owner(i, j, k))
+            case (node_interior)
+              nodes%n_interior = nodes%n_interior + 1
+              nodes%interior(:, nodes%n_interior) = [i, j, k]
+              nodes%interior_body(nodes%n_interior) = owner(i, j, k)
+            end select
+          end do
+        end do
+      end do
+      call fill_field_status(grid, status, k_lo, nodes)
+
+      nodes%n_fallback = 0
+      nodes%n_overlap = 0
+      nodes%halo_planes_needed = 0
+      ! The ghost list's index of each local ghost node, for the stencils' ghost links (zeroed after).
+      do g = 1, nodes%n_ghost
+        work%ghost_index(nodes%ghost(g)%node(1), nodes%ghost(g)%node(2), nodes%ghost(g)%node(3)) = g
+      end do
+      do g = 1, nodes%n_ghost
+        call build_ghost_record(grid, bodies, options, component, status, k_lo, work%ghost_index, nodes%ghost(g))
+        if (nodes%ghost(g)%fallback) nodes%n_fallback = nodes%n_fallback + 1
+        if (nodes%ghost(g)%fallback .and. nodes%ghost(g)%image_distance <= 0.0_wp) nodes%n_overlap = nodes%n_overlap + 1
+        k = nodes%ghost(g)%node(3) + nodes%ghost(g)%lower_offset(3)
+        nodes%halo_planes_needed = max(nodes%halo_planes_needed, 1 - k, k + 1 - grid%nz_local)
+      end do
+      do g = 1, nodes%n_ghost
+        work%ghost_index(nodes%ghost(g)%node(1), nodes%ghost(g)%node(2), nodes%ghost(g)%node(3)) = 0
+      end do
+    end associate
+    call clear_marked(work, size(bodies))
+  end subroutine classify_component
+
+  !> Work arrays for owner planes k_first..k_last (allocated, all zero, when the grid or the
+  !> reach changed; else kept, zero by the invariant) and the body boxes' marks.
+  subroutine prepare_work(work, grid, n_bodies, k_first, k_last)
+    type(classification_work_t), intent(inout) :: work
+    type(fluid_grid_t), intent(in) :: grid
+    integer, intent(in) :: n_bodies, k_first, k_last
+    logical :: fits
+    fits = allocated(work%owner)
+    if (fits) fits = size(work%owner, 1) == grid%nx .and. size(work%owner, 2) == grid%ny .and. &
+                     lbound(work%owner, 3) == k_first .and. ubound(work%owner, 3) == k_last
+    if (.not. fits) then
+      if (allocated(work%owner)) deallocate(work%owner, work%status, work%ghost_index)
+      allocate(work%owner(grid%nx, grid%ny, k_first:k_last), work%status(grid%nx, grid%ny, k_first + 1:k_last - 1))
+      allocate(work%ghost_index(grid%nx, grid%ny, grid%nz_local))
+      work%owner = 0
+      work%status = node_fluid
+      work%ghost_index = 0
+      work%k_first = k_first
+    end if
+    if (allocated(work%marked_x)) then
+      if (size(work%marked_x, 2) /= n_bodies .or. .not. fits) deallocate(work%marked_x, work%marked_y, work%marked_z)
+    end if
+    if (.not. allocated(work%marked_x)) allocate(work%marked_x(grid%nx, n_bodies), work%marked_y(grid%ny, n_bodies), &
+                                                 work%marked_z(k_first:k_last, n_bodies))
+    work%marked_x = .false.
+    work%marked_y = .false.
+    work%marked_z = .false.
+  end subroutine prepare_work
+
+  !> Zero owner and status in the boxes the bodies marked (restores the work's invariant).
+  subroutine clear_marked(work, n_bodies)
+    type(classification_work_t), intent(inout) :: work
+    integer, intent(in) :: n_bodies
+    integer, allocatable :: list_x(:), list_y(:)
+    integer :: n, i, j, k
+    do n = 1, n_bodies
+      list_x = pack([(i, i = 1, size(work%owner, 1))], work%marked_x(:, n))
+      list_y = pack([(j, j = 1, size(work%owner, 2))], work%marked_y(:, n))
+      do k = lbound(work%owner, 3), ubound(work%owner, 3)
+        if (.not. work%marked_z(k, n)) cycle
+        work%owner(list_x, list_y, k) = 0
+        if (k >= lbound(work%status, 3) .and. k <= ubound(work%status, 3)) work%status(list_x, list_y, k) = node_fluid
+      end do
     end do
+  end subroutine clear_marked
+
+  !> The field-layout status (0:nx+1, 0:ny+1, 0:nz_local+1) back to fluid: allocated when its shape
+  !> changed; else only where the last classification put solid nodes (its ghost and interior
+  !> lists with their halo-ring copies, and the two planes beyond the slab).
+  subroutine clear_field_status(grid, nodes)
+    type(fluid_grid_t), intent(in) :: grid
+    type(component_nodes_t), intent(inout) :: nodes
+    integer :: m
+    logical :: fits
+    fits = allocated(nodes%status)
+    if (fits) fits = all(lbound(nodes%status) == 0) .and. all(ubound(nodes%status) == [grid%nx + 1, grid%ny + 1, &
+                                                                                          grid%nz_local + 1])
+    if (.not. fits) then
+      if (allocated(nodes%status)) deallocate(nodes%status)
+      allocate(nodes%status(0:grid%nx + 1, 0:grid%ny + 1, 0:grid%nz_local + 1))
+      nodes%status = node_fluid
+      return
+    end if
+    do m = 1, nodes%n_ghost
+      call set_with_ring(nodes%status, nodes%ghost(m)%node, node_fluid)
+    end do
+    do m = 1, nodes%n_interior
+      call set_with_ring(nodes%status, nodes%interior(:, m), node_fluid)
+    end do
+    nodes%status(:, :, 0) = node_fluid
+    nodes%status(:, :, grid%nz_local + 1) = node_fluid
+  end subroutine clear_field_status
+
+  !> The field-layout status from the new lists, the planes beyond the slab and the periodic ring.
+  subroutine fill_field_status(grid, status, k_lo, nodes)
+    type(fluid_grid_t), intent(in) :: grid
+    integer, intent(in) :: k_lo
+    integer(int8), intent(in) :: status(:, :, k_lo:)
+    type(component_nodes_t), intent(inout) :: nodes
+    integer :: m, k, nzl
+    nzl = grid%nz_local
+    do m = 1, nodes%n_ghost
+      call set_with_ring(nodes%status, nodes%ghost(m)%node, node_ghost)
+    end do
+    do m = 1, nodes%n_interior
+      call set_with_ring(nodes%status, nodes%interior(:, m), node_interior)
+    end do
+    do k = 0, nzl + 1, nzl + 1
+      nodes%status(1:grid%nx, 1:grid%ny, k) = status(:, :, k)
+      nodes%status(0, 1:grid%ny, k) = nodes%status(grid%nx, 1:grid%ny, k)
+      nodes%status(grid%nx + 1, 1:grid%ny, k) = nodes%status(1, 1:grid%ny, k)
+      nodes%status(:, 0, k) = nodes%status(:, grid%ny, k)
+      nodes%status(:, grid%ny + 1, k) = nodes%status(:, 1, k)
+    end do
+  end subroutine fill_field_status
+
+  !> status(i, j, k) = value at node (i, j, k) (i, j in 1..n, k local) and at its copies on the
+  !> periodic halo ring (i = 0 is i = nx, i = nx + 1 is i = 1; likewise j; corners included).
+  pure subroutine set_with_ring(status, node, value)
+    integer(int8), intent(inout) :: status(0:, 0:, 0:)
+    integer, intent(in) :: node(3)
+    integer(int8), intent(in) :: value
+    integer :: i_copies(2), j_copies(2), a, b, nx, ny
+    nx = ubound(status, 1) - 1
+    ny = ubound(status, 2) - 1
+    i_copies = node(1)
+    if (node(1) == nx) i_copies(2) = 0
+    if (node(1) == 1) i_copies(2) = nx + 1
+    j_copies = node(2)
+    if (node(2) == ny) j_copies(2) = 0
+    if (node(2) == 1) j_copies(2) = ny + 1
+    do b = 1, 2
+      do a = 1, 2
+        status(i_copies(a), j_copies(b), node(3)) = value
+      end do
+    end do
+  end subroutine set_with_ring
+
+  !> work%owner(i, j, k) = index of the body that contains node (i, j, k) (k local, extended), else
+  !> 0 (zero on entry). Only the nodes within each body's lab bounding box are tested; the box's
+  !> index sets go to work%marked_* (for clear_marked) and their union to near_*.
+  subroutine mark_solid_nodes(grid, bodies, component, work, near_x, near_y, near_z)
+    type(fluid_grid_t), intent(in) :: grid
+    type(immersed_body_t), intent(in) :: bodies(:)
+    integer, intent(in) :: component
+    type(classification_work_t), intent(inout) :: work
+    logical, intent(out) :: near_x(:), near_y(:), near_z(work%k_first:)
+    integer :: n, i, j, k, previous
+    real(wp) :: box(3), extent(3), x(3), d(3), d_previous, d_new, rotation(3, 3)
+    real(wp) :: sep_x(grid%nx), sep_y(grid%ny)
+    type(surface_projection_t) :: p_new, p_old
+
+    box = [grid%lx, grid%ly, grid%lz]
+    near_x = .false.
+    near_y = .false.
+    near_z = .false.
+    associate (owner => work%owner, in_x => work%marked_x, in_y => work%marked_y, in_z => work%marked_z)
+      do n = 1, size(bodies)
+        extent = lab_half_extent(bodies(n))
+        rotation = rotation_matrix(bodies(n)%orientation)
+        do i = 1, grid%nx
+          x = node_position(grid, component, i, 1, 1)
+          sep_x(i) = minimum_image(x(1) - bodies(n)%centre(1), box(1))
+          in_x(i, n) = abs(sep_x(i)) <= extent(1)
+          near_x(i) = near_x(i) .or. in_x(i, n)
+        end do
+        do j = 1, grid%ny
+          x = node_position(grid, component, 1, j, 1)
+          sep_y(j) = minimum_image(x(2) - bodies(n)%centre(2), box(2))
+          in_y(j, n) = abs(sep_y(j)) <= extent(2)
+          near_y(j) = near_y(j) .or. in_y(j, n)
+        end do
+        do k = lbound(owner, 3), ubound(owner, 3)
+          x = node_position(grid, component, 1, 1, k)
+          d(3) = minimum_image(x(3) - bodies(n)%centre(3), box(3))
+          if (abs(d(3)) > extent(3)) cycle
+          near_z(k) = .true.
+          in_z(k, n) = .true.
+          do j = 1, grid%ny
+            if (.not. in_y(j, n)) cycle
+            d(2) = sep_y(j)
+            do i = 1, grid%nx
+              if (.not. in_x(i, n)) cycle
+              d(1) = sep_x(i)
+              ! Inside test on the body-frame point R^T d.
+              if (.not. (implicit_function(bodies(n)%shape, matmul(d, rotation)) < 0.0_wp)) cycle
+              if (bodies(n)%mesh%level >= 0) then   ! the mesh lies inside the spheroid
+                if (.not. mesh_contains(bodies(n)%mesh, matmul(d, rotation))) cycle
+              end if
+              previous = owner(i, j, k)
+              if (previous == 0) then
+                owner(i, j, k) = n
+              else
+                ! Inside two (overlapping) bodies: the one whose surface is nearer.
+                p_new = body_closest_point(bodies(n)%shape, rotate_to_body(bodies(n)%orientation, d))
+                x = node_position(grid, component, i, j, k)
+                p_old = body_closest_point(bodies(previous)%shape, rotate_to_body(bodies(previous)%orientation, &
+                                           minimum_image(x - bodies(previous)%centre, box)))
+                d_new = abs(p_new%signed_distance)
+                d_previous = abs(p_old%signed_distance)
+                if (d_new < d_previous) owner(i, j, k) = n
+              end if
+            end do
+          end do
+        end do
+      end do
+    end associate
   end subroutine mark_solid_nodes
 
   !> Closest point, normal, image point (with the other-body fallback) and trilinear stencil of
   !> one ghost node. status covers (1:nx, 1:ny, k_lo:) in extended local k.
-  subroutine build_ghost_record(grid, bodies, options, component, status, k_lo, ghost_nodes, ghost)
+  subroutine build_ghost_record(grid, bodies, options, component, status, k_lo, ghost_index, ghost)
     type(fluid_grid_t), intent(in) :: grid
     type(immersed_body_t), intent(in) :: bodies(:)
     type(immersed_options_t), intent(in) :: options
     integer, intent(in) :: component, k_lo
     integer(int8), intent(in) :: status(:, :, k_lo:)
-    integer, intent(in) :: ghost_nodes(:, :)     !< i, j, k of this rank's ghosts (for the stencil's ghost links)
+    integer, intent(in) :: ghost_index(:, :, :)  !< (nx, ny, nz_local) index of each local ghost node, else 0
     type(ghost_node_t), intent(inout) :: ghost
     type(surface_projection_t) :: projection
     real(wp) :: box(3), spacing(3), centre(3), nearest_entry, fraction(3), t(3), w(0:1, 3)
@@ -468,8 +588,7 @@ contains
       ghost%stencil_local(corner) = node(3) >= 1 .and. node(3) <= grid%nz_local
       ghost%stencil_ghost(corner) = 0
       if (ghost%stencil_local(corner) .and. ghost%stencil_status(corner) == node_ghost) &
-        ghost%stencil_ghost(corner) = find_ghost(ghost_nodes, grid%nx, grid%ny, ghost%stencil(1, corner), &
-                                                 ghost%stencil(2, corner), node(3))
+        ghost%stencil_ghost(corner) = ghost_index(ghost%stencil(1, corner), ghost%stencil(2, corner), node(3))
       if (all(bits + ghost%lower_offset == 0)) ghost%self_corner = corner
     end do
   end subroutine build_ghost_record

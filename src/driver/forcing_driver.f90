@@ -22,7 +22,7 @@ module forcing_driver
   implicit none
   private
   public :: forcing_driver_t, forcing_driver_start, forced_fluid_advance, forcing_driver_power_input, &
-            forcing_driver_write_checkpoint, forcing_driver_finish
+            forcing_driver_write_checkpoint, forcing_driver_finish, forcing_driver_evaluate, forcing_driver_advance
 
   type :: forcing_driver_t
     logical :: active = .false.                 !< &scene forcing = 'eswaran_pope'
@@ -65,14 +65,29 @@ contains
       call fluid_advance(solver, dt)
       return
     end if
+    call forcing_driver_evaluate(driver)
+    call fluid_advance(solver, dt, driver%fx, driver%fy, driver%fz)
+    call forcing_driver_advance(driver, dt)
+  end subroutine forced_fluid_advance
+
+  !> f^n from the current OU coefficients on the faces (fx, fy, fz), for a step that takes it as
+  !> its body force (forced_fluid_advance, or the staged step with immersed bodies). Active only.
+  subroutine forcing_driver_evaluate(driver)
+    type(forcing_driver_t), intent(inout) :: driver
     call timer_tic('forcing')
     call forcing_set_fields(driver%forcing, driver%fx, driver%fy, driver%fz)
     call timer_toc('forcing')
-    call fluid_advance(solver, dt, driver%fx, driver%fy, driver%fz)
+  end subroutine forcing_driver_evaluate
+
+  !> The OU processes from the time level of the step just taken to the next (after the step that
+  !> used f^n). Active only.
+  subroutine forcing_driver_advance(driver, dt)
+    type(forcing_driver_t), intent(inout) :: driver
+    real(wp), intent(in) :: dt
     call timer_tic('forcing')
     call forcing_advance(driver%forcing, dt)
     call timer_toc('forcing')
-  end subroutine forced_fluid_advance
+  end subroutine forcing_driver_advance
 
   !> <f.u> (m^2/s^3) of the current velocity with f at the current time level; 0 when the forcing
   !> is off. Collective.

@@ -24,7 +24,7 @@ module immersed_scene
   use icosphere_mesh, only: icosphere_mesh_t, build_icosphere_mesh
   use immersed_surface_loads, only: surface_loads_t, surface_loads_create, surface_loads_compute
   use config_bodies, only: bodies_config_t
-  use immersed_geometry, only: immersed_body_t, thin_dimension_cells
+  use immersed_geometry, only: immersed_body_t, thin_dimension_cells, node_fluid
   use immersed_boundary, only: immersed_boundary_t, ibm_settings_t, imposition_report_t, ibm_set_bodies, &
                                ibm_impose, ibm_begin_step, ibm_step_loads, cell_divergence_max, ibm_extend_pressure, &
                                status_change_summary
@@ -114,13 +114,25 @@ contains
     scene%timer = timer_register('immersed boundary')
   end subroutine immersed_scene_create
 
-  !> One fluid step of length dt with the immersed bodies (collective).
-  subroutine immersed_step(scene, solver, dt)
+  !> One fluid step of length dt with the immersed bodies (collective). fluid_force_*: a body force
+  !> on the fluid (m/s^2, the Eswaran-Pope f^n on the faces), added to the uniform drive on the fluid
+  !> nodes of the new placement only: the imposition replaces the bodies' nodes, so the force there
+  !> would only add rho f over the body's nodes to its load (the drive, a mean pressure gradient,
+  !> does act on the body and stays everywhere).
+  subroutine immersed_step(scene, solver, dt, fluid_force_u, fluid_force_v, fluid_force_w)
     type(immersed_scene_t), intent(inout) :: scene
     type(fluid_solver_t), intent(inout) :: solver
     real(wp), intent(in) :: dt
+    real(wp), intent(in), optional :: fluid_force_u(0:, 0:, 0:), fluid_force_v(0:, 0:, 0:), fluid_force_w(0:, 0:, 0:)
     call timer_tic(scene%timer)
     call place_bodies(scene, solver, solver%time + dt, classify=scene%moving)
+    if (present(fluid_force_u)) then
+      associate (drive => scene%driving_force / solver%density, nodes => scene%ibm%geometry%component)
+        scene%force_u = drive(1) + merge(fluid_force_u, 0.0_wp, nodes(1)%status == node_fluid)
+        scene%force_v = drive(2) + merge(fluid_force_v, 0.0_wp, nodes(2)%status == node_fluid)
+        scene%force_w = drive(3) + merge(fluid_force_w, 0.0_wp, nodes(3)%status == node_fluid)
+      end associate
+    end if
     call ibm_begin_step(scene%ibm, solver%grid, solver%u, solver%v, solver%w)
     call timer_toc(scene%timer)
     call fluid_predict(solver, dt, force_u=scene%force_u, force_v=scene%force_v, force_w=scene%force_w)

@@ -22,10 +22,13 @@ module resolved_scene
   use fluid_restart, only: write_fluid_checkpoint, read_fluid_checkpoint, write_fluid_snapshot, read_initial_field
   use fluid_monitor, only: statistics_open, statistics_write, statistics_close, progress_line, timing_report
   use forcing_driver, only: forcing_driver_t, forcing_driver_start, forced_fluid_advance, &
-                            forcing_driver_power_input, forcing_driver_write_checkpoint, forcing_driver_finish
+                            forcing_driver_power_input, forcing_driver_write_checkpoint, forcing_driver_finish, &
+                            forcing_driver_evaluate, forcing_driver_advance
   use flow_statistics_output, only: flow_output_t, flow_output_start, flow_output_due, flow_output_record, &
                                     flow_output_finish
+  use parallel_env, only: global_sum
   use immersed_boundary, only: ibm_settings_t, status_change_summary
+  use immersed_geometry, only: fallback_count
   use immersed_scene, only: immersed_scene_t, immersed_scene_create, immersed_step, motions_from_config, &
                             loads_open, loads_write, loads_close
   implicit none
@@ -48,6 +51,11 @@ contains
     integer(i8) :: first_step
     integer :: timer_io
     logical :: finite
+    ! Ghost rows whose image point fell inside another body (gap under about two cells) and were
+    ! moved back to the mid-gap (immersed_geometry): this step's count over all ranks, the sum over
+    ! the run's steps, the steps with any, the most in one step.
+    integer :: fallbacks, fallback_steps, fallback_most
+    integer(i8) :: fallback_rows
 
     call start_fluid(cfg, solver, restart)
     timer_io = timer_register('I/O')
@@ -67,6 +75,7 @@ contains
       call output_fields(solver)
     end if
     first_step = solver%step
+    fallbacks = 0; fallback_steps = 0; fallback_most = 0; fallback_rows = 0
     start_wall = wall_time()
     step_wall = start_wall
 
@@ -77,8 +86,7 @@ contains
       dt = next_time_step(cfg%run%dt_mode, cfg%run%dt, cfg%run%cfl_target, rate, viscous_limit, solver%time, &
                           cfg%run%end_time)
       if (with_bodies) then
-        call immersed_step(bodies, solver, dt)
-        call loads_write(bodies, solver%step, solver%time)
+        call bodies_step(dt)
       else
         call forced_fluid_advance(forcing, solver, dt)   ! fluid_advance with the body force f^n, then f^n+1
       end if
@@ -99,7 +107,8 @@ contains
         step_wall = wall_time()
         if (with_bodies) call log_line('immersed boundary: sweeps '//int_text(bodies%predicted%sweeps)// &
             ', residual '//real_text(bodies%predicted%residual)//', slip after projection '// &
-            real_text(bodies%projected%largest_change)//', cut-cell divergence '//real_text(bodies%divergence)//' 1/s')
+            real_text(bodies%projected%largest_change)//', cut-cell divergence '//real_text(bodies%divergence)// &
+            ' 1/s, image-point fallbacks '//int_text(fallbacks))
         if (with_bodies .and. bodies%moving) call log_line(status_change_summary(bodies%ibm%changes))
       end if
       if (solver%time >= next_field_time * (1.0_wp - 1.0e-12_wp) .and. solver%time < cfg%run%end_time) then
@@ -117,7 +126,12 @@ contains
     call statistics_close()
     call forcing_driver_finish(forcing, solver)
     call flow_output_finish(flow)
-    if (with_bodies) call loads_close(bodies)
+    if (with_bodies) then
+      call loads_close(bodies)
+      call log_line('immersed boundary: image-point fallbacks (image segment inside another body, moved back to '// &
+          'the mid-gap) in '//int_text(fallback_steps)//' of '//int_text(solver%step - first_step)//' steps, '// &
+          int_text(fallback_rows)//' ghost rows in all, at most '//int_text(fallback_most)//' in one step')
+    end if
     call timing_report(solver%step - first_step, wall_time() - start_wall)
     call log_line('resolved scene: '//trim(cfg%run%name)//' reached t = '//real_text(solver%time)//' s; '// &
         'time series '//run_file('fluid_statistics.dat')//', fields '//run_file('fields.xdmf')// &
@@ -137,6 +151,35 @@ contains
       call log_line('immersed boundary: '//trim(cfg%scene%ibm_coupling)//' coupling, '// &
           int_text(cfg%bodies%count)//' bodies, loads every step in '//run_file('bodies_loads.dat'))
     end subroutine start_bodies
+
+    !> One step with the bodies (immersed_step), their loads and fallbacks. With the forcing on, its
+    !> f^n goes into the predictor with the drive and the OU processes advance after the step, in
+    !> forced_fluid_advance's order.
+    subroutine bodies_step(dt)
+      real(wp), intent(in) :: dt
+      if (forcing%active) then
+        call forcing_driver_evaluate(forcing)
+        call immersed_step(bodies, solver, dt, forcing%fx, forcing%fy, forcing%fz)
+        call forcing_driver_advance(forcing, dt)
+      else
+        call immersed_step(bodies, solver, dt)
+      end if
+      call loads_write(bodies, solver%step, solver%time)
+      call count_fallbacks()
+    end subroutine bodies_step
+
+    !> This step's image-point fallbacks over all ranks (collective), added to the run's tally; the
+    !> first step with any is named in the log.
+    subroutine count_fallbacks()
+      fallbacks = nint(global_sum(real(fallback_count(bodies%ibm%geometry), wp)))
+      if (fallbacks == 0) return
+      if (fallback_steps == 0) call log_line('immersed boundary: step '//int_text(solver%step)//': '// &
+          int_text(fallbacks)//' ghost rows with the image point moved back to the mid-gap (another body within '// &
+          'about two cells; linear extrapolation, docs/theory.md)')
+      fallback_steps = fallback_steps + 1
+      fallback_rows = fallback_rows + fallbacks
+      fallback_most = max(fallback_most, fallbacks)
+    end subroutine count_fallbacks
 
     subroutine output_fields(solver)
       type(fluid_solver_t), intent(inout) :: solver
