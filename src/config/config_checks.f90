@@ -96,14 +96,12 @@ contains
         '1 (sub-steps split a fluid step; without a resolved fluid set &run dt itself)')
   end subroutine check_scene_combinations
 
-  !> Bodies in prescribed motion: resolved fluid, explicit diffusion, no Eswaran-Pope forcing.
+  !> Bodies in prescribed motion: resolved fluid, no Eswaran-Pope forcing (either viscous scheme: with
+  !> Crank-Nicolson the predictor's system holds the body rows, immersed_predictor).
   subroutine check_prescribed_cross(cfg)
     type(agglo_config_t), intent(in) :: cfg
     if (cfg%scene%fluid /= 'resolved') call input_error('scene', 'particles', '''prescribed'' with fluid = '''// &
         trim(cfg%scene%fluid)//'''', 'fluid = ''resolved'' (bodies in prescribed motion need the resolved fluid)')
-    if (cfg%fluid%viscous_scheme == 'crank_nicolson') call input_error('fluid', 'viscous_scheme', &
-        '''crank_nicolson'' with &scene particles = ''prescribed''', '''explicit'' (the Crank-Nicolson '// &
-        'predictor with the immersed-boundary ghost rows is not available yet)')
     if (cfg%scene%forcing /= 'none') call input_error('scene', 'forcing', ''''//trim(cfg%scene%forcing)// &
         ''' with particles = ''prescribed''', '''none'' (drive the flow with &bodies driving_force)')
   end subroutine check_prescribed_cross

@@ -42,6 +42,8 @@ module immersed_boundary
   private
   public :: immersed_boundary_t, ibm_settings_t, imposition_report_t
   public :: ibm_set_bodies, ibm_impose, ibm_begin_step, ibm_step_loads, cell_divergence_max
+  !> The rigid velocity and the load bookkeeping of one node, for a solver that imposes the body rows itself
+  public :: rigid_velocity, account
 
   !> Lever arms r (minimum image of the point - the body's centre, m) of one component's nodes,
   !> computed once per placement so that an imposition costs only U + Omega x r per node.

@@ -3,6 +3,8 @@
 !>   bodies at t^{n+1} (reclassified when they move) -> fluid_predict (u*, with the uniform drive)
 !>   -> impose on u* -> fluid_project -> re-impose on u^{n+1} -> fluid_finish_step -> loads,
 !> and the per-step time series of every body's force and torque (bodies_loads.dat, docs/outputs.md).
+!> With &fluid viscous_scheme = 'crank_nicolson' the predictor's system holds the body rows
+!> (immersed_predictor, solved with hypre), so u* needs no imposition.
 !>
 !> Prescribed motion of body n (lab frame): centre c(t) = c0 + U t + A sin(2 pi f t), velocity
 !> U + 2 pi f A cos(2 pi f t), constant angular velocity Omega, orientation q(t) = rot(Omega t) q0.
@@ -17,6 +19,9 @@ module immersed_scene
   use timer_registry, only: timer_register, timer_tic, timer_toc
   use fluid_grid, only: fluid_grid_t, allocate_field
   use fluid_solver, only: fluid_solver_t, fluid_predict, fluid_project, fluid_finish_step
+  use hypre_solver, only: linear_solver_config_t
+  use immersed_predictor, only: immersed_predictor_t, immersed_predictor_create, immersed_predictor_reclassified, &
+                                default_predictor_config
   use quaternion, only: quaternion_from_axis_angle, quaternion_product, quaternion_normalise
   use spheroid, only: spheroid_t, make_spheroid
   use config_bodies, only: bodies_config_t
@@ -46,7 +51,9 @@ module immersed_scene
     real(wp), allocatable :: force_u(:, :, :), force_v(:, :, :), force_w(:, :, :)   !< m/s^2, f / rho
     logical :: moving = .false.                !< some body changes its position or orientation
     real(wp), allocatable :: force(:, :), torque(:, :)   !< (3, n) N and N m of the last step
-    type(imposition_report_t) :: predicted, projected    !< the two impositions of the last step
+    type(imposition_report_t) :: predicted, projected    !< the two impositions of the last step (with
+                                                         !< Crank-Nicolson predicted is the hypre solve's)
+    type(immersed_predictor_t) :: predictor    !< the Crank-Nicolson predictor with the body rows
     real(wp) :: divergence = 0                 !< 1/s, largest |div u| after the re-imposition (cut cells)
     integer :: timer = 0
     integer :: loads_unit = 0
@@ -56,12 +63,15 @@ module immersed_scene
 contains
 
   !> Place the bodies at t = solver%time and classify the nodes (collective).
-  subroutine immersed_scene_create(scene, solver, motion, settings, driving_force)
+  !> predictor_config: the hypre solve of the Crank-Nicolson predictor (default
+  !> default_predictor_config(1e-10, 200)); unused with explicit diffusion.
+  subroutine immersed_scene_create(scene, solver, motion, settings, driving_force, predictor_config)
     type(immersed_scene_t), intent(inout) :: scene
     type(fluid_solver_t), intent(inout) :: solver
     type(prescribed_motion_t), intent(in) :: motion(:)
     type(ibm_settings_t), intent(in) :: settings
     real(wp), intent(in) :: driving_force(3)
+    type(linear_solver_config_t), intent(in), optional :: predictor_config
     integer :: n
     scene%motion = motion
     scene%ibm%settings = settings
@@ -82,23 +92,40 @@ contains
     scene%force = 0
     scene%torque = 0
     call place_bodies(scene, solver, solver%time, classify=.true.)
+    if (solver%crank_nicolson) then
+      if (present(predictor_config)) then
+        call immersed_predictor_create(scene%predictor, solver%grid, predictor_config)
+      else
+        call immersed_predictor_create(scene%predictor, solver%grid, default_predictor_config(1.0e-10_wp, 200))
+      end if
+    end if
     scene%timer = timer_register('immersed boundary')
   end subroutine immersed_scene_create
 
   !> One fluid step of length dt with the immersed bodies (collective).
   subroutine immersed_step(scene, solver, dt)
-    type(immersed_scene_t), intent(inout) :: scene
+    type(immersed_scene_t), intent(inout), target :: scene
     type(fluid_solver_t), intent(inout) :: solver
     real(wp), intent(in) :: dt
     call timer_tic(scene%timer)
     call place_bodies(scene, solver, solver%time + dt, classify=scene%moving)
     call ibm_begin_step(scene%ibm, solver%grid, solver%u, solver%v, solver%w)
     call timer_toc(scene%timer)
-    call fluid_predict(solver, dt, force_u=scene%force_u, force_v=scene%force_v, force_w=scene%force_w)
-    call timer_tic(scene%timer)
-    call ibm_impose(scene%ibm, solver%grid, solver%explicit_old_u, solver%explicit_old_v, solver%explicit_old_w, &
-                    scene%predicted)
-    call timer_toc(scene%timer)
+    if (solver%crank_nicolson) then
+      ! The body rows are part of the predictor's system (the predictor's time counts as the fluid's).
+      if (scene%moving) call immersed_predictor_reclassified(scene%predictor)
+      scene%predictor%ibm => scene%ibm
+      call fluid_predict(solver, dt, scene%predictor, force_u=scene%force_u, force_v=scene%force_v, &
+                         force_w=scene%force_w)
+      scene%predictor%ibm => null()
+      scene%predicted = scene%predictor%report
+    else
+      call fluid_predict(solver, dt, force_u=scene%force_u, force_v=scene%force_v, force_w=scene%force_w)
+      call timer_tic(scene%timer)
+      call ibm_impose(scene%ibm, solver%grid, solver%explicit_old_u, solver%explicit_old_v, solver%explicit_old_w, &
+                      scene%predicted)
+      call timer_toc(scene%timer)
+    end if
     call fluid_project(solver)
     call timer_tic(scene%timer)
     call ibm_impose(scene%ibm, solver%grid, solver%u, solver%v, solver%w, scene%projected)

@@ -26,6 +26,7 @@ module resolved_scene
   use flow_statistics_output, only: flow_output_t, flow_output_start, flow_output_due, flow_output_record, &
                                     flow_output_finish
   use immersed_boundary, only: ibm_settings_t
+  use immersed_predictor, only: default_predictor_config
   use immersed_scene, only: immersed_scene_t, immersed_scene_create, immersed_step, motions_from_config, &
                             loads_open, loads_write, loads_close
   implicit none
@@ -130,7 +131,8 @@ contains
       settings%max_sweeps = cfg%bodies%max_sweeps
       settings%fluid_density = cfg%fluid%density
       call immersed_scene_create(bodies, solver, motions_from_config(cfg%bodies, solver%grid), settings, &
-                                 cfg%bodies%driving_force)
+                                 cfg%bodies%driving_force, default_predictor_config(cfg%fluid%predictor_tolerance, &
+                                 cfg%fluid%predictor_max_iterations))
       call loads_open(bodies, run_file('bodies_loads.dat'), append=cfg%run%restart, last_step=solver%step)
       if (bodies%moving .and. solver%incremental_pressure) call log_line('immersed boundary: note: moving '// &
           'bodies with &fluid pressure_scheme = ''incremental'' give force spikes when nodes are uncovered '// &

@@ -22,6 +22,7 @@ module sphere_array_case
   use fluid_solver, only: fluid_solver_t, fluid_solver_create
   use spheroid, only: make_spheroid
   use immersed_boundary, only: ibm_settings_t
+  use hypre_solver, only: linear_solver_config_t
   use immersed_scene, only: prescribed_motion_t, immersed_scene_t, immersed_scene_create, immersed_step
   implicit none
   private
@@ -37,6 +38,9 @@ module sphere_array_case
     real(wp) :: offset_cells(3) = [0.13_wp, 0.27_wp, 0.41_wp]   !< sphere centre - box centre, cells
     real(wp) :: ghost_tolerance = 1.0e-12_wp
     logical :: rotating = .false.                !< rotating sphere, no drive, steady torque
+    character(len=16) :: viscous_scheme = 'explicit'   !< or 'crank_nicolson' (the predictor with the body rows)
+    type(linear_solver_config_t) :: predictor = linear_solver_config_t(method='bicgstab', preconditioner='user', &
+                                                                       tolerance=1.0e-10_wp, max_iterations=200)
   end type sphere_array_case_t
 
   type :: sphere_array_result_t
@@ -79,7 +83,7 @@ contains
     grid_cfg = grid_config_t(nx=case%cells, ny=case%cells, nz=case%cells, length_x=box, length_y=box, length_z=box)
     fluid_cfg%density = density
     fluid_cfg%viscosity = viscosity
-    fluid_cfg%viscous_scheme = 'explicit'
+    fluid_cfg%viscous_scheme = case%viscous_scheme
     fluid_cfg%pressure_scheme = 'incremental'
     call fluid_solver_create(solver, grid_cfg, fluid_cfg)
     solver%u = 0; solver%v = 0; solver%w = 0; solver%pressure = 0
@@ -97,7 +101,7 @@ contains
       ! Omega a = 1e-7 m/s: Re = Omega a^2 / nu below 1e-4.
       motion(1)%angular_velocity = [0.0_wp, 0.0_wp, 1.0e-7_wp / radius]
     end if
-    call immersed_scene_create(scene, solver, motion, settings, [drive_x, 0.0_wp, 0.0_wp])
+    call immersed_scene_create(scene, solver, motion, settings, [drive_x, 0.0_wp, 0.0_wp], case%predictor)
 
     dt = case%viscous_number * solver%grid%dx**2 / viscosity
     u_old = 0
