@@ -97,7 +97,9 @@ contains
         call progress_line(solver%step, solver%time, dt, (wall_time() - step_wall) / cfg%run%progress_interval, &
             min(real(cfg%run%max_steps - solver%step, wp), (cfg%run%end_time - solver%time) / dt))
         step_wall = wall_time()
-        if (with_bodies) call log_line('immersed boundary: sweeps '//int_text(bodies%predicted%sweeps)// &
+        ! With Crank-Nicolson the predicted report is the hypre solve's (immersed_predictor).
+        if (with_bodies) call log_line('immersed boundary: '// &
+            trim(merge('hypre iterations', 'sweeps          ', solver%crank_nicolson))//' '//int_text(bodies%predicted%sweeps)// &
             ', residual '//real_text(bodies%predicted%residual)//', slip after projection '// &
             real_text(bodies%projected%largest_change)//', cut-cell divergence '//real_text(bodies%divergence)//' 1/s')
       end if

@@ -6,8 +6,8 @@
 #    largest load (round-off; the Jacobi ghost sweeps do not depend on the ranks), for both couplings;
 #  - the file has one row per body per step and the log names the sweeps and the residual;
 #  - a restart continues bodies_loads.dat bit for bit (rows after the checkpoint dropped);
-#  - refused decks, before any step, with a message naming the variable: Crank-Nicolson diffusion
-#    with bodies, load_method = 'surface', a disk thinner than 4 cells (the message gives the grid).
+#  - refused decks, before any step, with a message naming the variable: load_method = 'surface',
+#    a disk thinner than 4 cells (the message gives the grid). (Crank-Nicolson: test_immersed_cn_runs.sh.)
 # Prints PASS/FAIL lines; works in a temporary directory.
 set -u
 AGGLO=${AGGLO:?AGGLO must be the agglo executable}
@@ -73,8 +73,6 @@ refused() { # test name, deck file, expected text in the message
     echo "FAIL immersed_runs/$1: message without '$3': $(tail -n 3 "$2.out" | head -c 300)"
   fi
 }
-deck cn implicit crank_nicolson momentum needle 32 > cn.nml
-refused refuses_crank_nicolson_with_bodies cn.nml 'viscous_scheme'
 deck surface implicit explicit surface needle 32 > surface.nml
 refused refuses_surface_loads surface.nml 'load_method'
 deck thin implicit explicit momentum disk 16 > thin.nml
