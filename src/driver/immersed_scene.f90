@@ -21,7 +21,7 @@ module immersed_scene
   use fluid_solver, only: fluid_solver_t, fluid_predict, fluid_project, fluid_finish_step
   use hypre_solver, only: linear_solver_config_t
   use immersed_predictor, only: immersed_predictor_t, immersed_predictor_create, immersed_predictor_reclassified, &
-                                default_predictor_config
+                                immersed_predictor_first_guess, default_predictor_config
   use quaternion, only: quaternion_from_axis_angle, quaternion_product, quaternion_normalise
   use spheroid, only: spheroid_t, make_spheroid
   use config_bodies, only: bodies_config_t
@@ -54,6 +54,7 @@ module immersed_scene
     type(imposition_report_t) :: predicted, projected    !< the two impositions of the last step (with
                                                          !< Crank-Nicolson predicted is the hypre solve's)
     type(immersed_predictor_t) :: predictor    !< the Crank-Nicolson predictor with the body rows
+    logical :: guess_from_velocity = .true.    !< its Krylov solve starts from u^n (else from b)
     real(wp) :: divergence = 0                 !< 1/s, largest |div u| after the re-imposition (cut cells)
     integer :: timer = 0
     integer :: loads_unit = 0
@@ -115,6 +116,8 @@ contains
       ! The body rows are part of the predictor's system (the predictor's time counts as the fluid's).
       if (scene%moving) call immersed_predictor_reclassified(scene%predictor)
       scene%predictor%ibm => scene%ibm
+      if (scene%guess_from_velocity) call immersed_predictor_first_guess(scene%predictor, solver%grid, solver%u, &
+                                                                         solver%v, solver%w)
       call fluid_predict(solver, dt, scene%predictor, force_u=scene%force_u, force_v=scene%force_v, &
                          force_w=scene%force_w)
       scene%predictor%ibm => null()
