@@ -162,8 +162,9 @@ bench: deps ## run the benchmarks (results for docs/performance.md)
 	@BUILD=$(BUILD) tools/bench.sh
 
 validate: deps ## run the immersed-boundary validation ladder (the table in docs/validation.md)
-	@$(MAKE) --no-print-directory build $(BUILD)/bench/bench_immersed_ladder
+	@$(MAKE) --no-print-directory build $(BUILD)/bench/bench_immersed_ladder $(BUILD)/bench/bench_immersed_cn
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_immersed_ladder
+	$(MPIRUN) -np 1 $(BUILD)/bench/bench_immersed_cn
 
 clean: ## remove the build directory
 	rm -rf $(BUILD)

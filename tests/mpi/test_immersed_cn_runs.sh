@@ -8,7 +8,8 @@
 #    solve converges to 1e-12 on both; only the order of the sums differs), for both couplings;
 #  - the log names the hypre iterations and the residual;
 #  - non-convergence stops the run with the iterations, the residual and the advice;
-#  - &fluid predictor_tolerance out of range is refused naming the variable.
+#  - &fluid predictor_tolerance out of range is refused naming the variable;
+#  - a restart continues bodies_loads.dat bit for bit.
 # Prints PASS/FAIL lines; works in a temporary directory.
 set -u
 AGGLO=${AGGLO:?AGGLO must be the agglo executable}
@@ -79,3 +80,18 @@ deck stuck implicit 1.0e-14 2 > stuck.nml
 refused stops_when_not_converged stuck.nml 'did not converge in 2 iterations (relative residual .* > tolerance .*smaller &run dt'
 deck loose implicit 0.5 200 > loose.nml
 refused refuses_loose_tolerance loose.nml 'predictor_tolerance = '
+
+# Restart: checkpointed at step 4, the last checkpoint (step 8) deleted as if killed there,
+# restarted: bodies_loads.dat equals the uninterrupted run's to the bit (the Krylov solve starts
+# from u^n, which the checkpoint holds, and its matrices are rebuilt from the bodies' placement).
+deck restart implicit 1.0e-10 200 | sed 's/checkpoint_interval = 0/checkpoint_interval = 4/' > restart.nml
+if run 1 restart.nml && cp restart/bodies_loads.dat uninterrupted.dat && rm restart/checkpoints/checkpoint_0000000008.h5 \
+   && mpirun -np 1 "$AGGLO" restart.nml --set run.restart=.true. > restart.out 2>&1; then
+  if cmp -s uninterrupted.dat restart/bodies_loads.dat; then
+    echo "PASS immersed_cn_runs/restart_continues_loads_bit_for_bit  ($(grep -vc '^#' restart/bodies_loads.dat) rows)"
+  else
+    echo "FAIL immersed_cn_runs/restart_continues_loads_bit_for_bit: $(diff uninterrupted.dat restart/bodies_loads.dat | head -c 300)"
+  fi
+else
+  echo "FAIL immersed_cn_runs/restart_continues_loads_bit_for_bit: a run failed: $(tail -n 3 restart.out restart.nml.out 2>/dev/null | head -c 400)"
+fi
