@@ -20,7 +20,7 @@ module config_fluid
     character(len=16) :: pressure_scheme = 'non_incremental'  !< 'non_incremental' | 'incremental' (fluid_solver)
     !> The Crank-Nicolson predictor with immersed bodies (hypre, immersed_predictor): the relative
     !> residual ||b - A u*|| / ||b|| it stops at, and the iterations before the run stops.
-    real(wp) :: predictor_tolerance = 1.0e-10_wp
+    real(wp) :: predictor_tolerance = 1.0e-8_wp
     integer :: predictor_max_iterations = 200
   end type fluid_config_t
 

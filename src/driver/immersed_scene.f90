@@ -65,7 +65,7 @@ contains
 
   !> Place the bodies at t = solver%time and classify the nodes (collective).
   !> predictor_config: the hypre solve of the Crank-Nicolson predictor (default
-  !> default_predictor_config(1e-10, 200)); unused with explicit diffusion.
+  !> default_predictor_config(1e-8, 200)); unused with explicit diffusion.
   subroutine immersed_scene_create(scene, solver, motion, settings, driving_force, predictor_config)
     type(immersed_scene_t), intent(inout) :: scene
     type(fluid_solver_t), intent(inout) :: solver
@@ -97,7 +97,7 @@ contains
       if (present(predictor_config)) then
         call immersed_predictor_create(scene%predictor, solver%grid, predictor_config)
       else
-        call immersed_predictor_create(scene%predictor, solver%grid, default_predictor_config(1.0e-10_wp, 200))
+        call immersed_predictor_create(scene%predictor, solver%grid, default_predictor_config(1.0e-8_wp, 200))
       end if
     end if
     scene%timer = timer_register('immersed boundary')

@@ -40,7 +40,7 @@ module sphere_array_case
     logical :: rotating = .false.                !< rotating sphere, no drive, steady torque
     character(len=16) :: viscous_scheme = 'explicit'   !< or 'crank_nicolson' (the predictor with the body rows)
     type(linear_solver_config_t) :: predictor = linear_solver_config_t(method='bicgstab', preconditioner='user', &
-                                                                       tolerance=1.0e-10_wp, max_iterations=200)
+                                                                       tolerance=1.0e-8_wp, max_iterations=200)
   end type sphere_array_case_t
 
   type :: sphere_array_result_t
