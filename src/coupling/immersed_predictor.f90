@@ -132,6 +132,8 @@ contains
 
   !> A u* = b with the body rows (collective). On entry u, v, w hold b, on exit u* (interiors;
   !> halos current). The momentum of the body rows goes to predictor%ibm's load bookkeeping.
+  !> poisson is not used: hypre calls the preconditioner through an address it keeps between
+  !> steps, so the preconditioner has its own FFT (predictor%fft).
   subroutine immersed_predictor_solve(self, grid, poisson, alpha, u, v, w)
     class(immersed_predictor_t), intent(inout) :: self
     type(fluid_grid_t), intent(inout) :: grid

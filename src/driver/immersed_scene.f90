@@ -269,15 +269,20 @@ contains
     type(immersed_scene_t), intent(inout) :: scene
     if (scene%loads_opened) close(scene%loads_unit)
     scene%loads_opened = .false.
-    if (scene%predictor%builds > 0) call log_line('immersed scene: Crank-Nicolson predictor with the body rows: '// &
-        trim(scene%predictor%config%method)//' + '//trim(merge('FFT Helmholtz   ', scene%predictor%config%preconditioner, &
-        scene%predictor%config%preconditioner == 'user'))//', matrices built '//int_text(scene%predictor%builds)// &
-        ' times ('//real_text(scene%predictor%build_seconds)//' s), solves '//real_text(scene%predictor%solve_seconds)// &
-        ' s; last step hypre iterations '//int_text(scene%predicted%sweeps)//', relative residual '// &
-        real_text(scene%predicted%residual))
-    call log_line('immersed scene: last step sweeps '//int_text(scene%predicted%sweeps)//' (plane exchanges '// &
-                  int_text(scene%predicted%exchanges)//')'// &
-                  ', residual '//real_text(scene%predicted%residual)//', slip '// &
-                  real_text(scene%projected%largest_change)//', cut-cell divergence '//real_text(scene%divergence)//' 1/s')
+    if (scene%predictor%builds > 0) then
+      ! Crank-Nicolson: the predicted report is the hypre solve's (immersed_predictor).
+      call log_line('immersed scene: Crank-Nicolson predictor with the body rows: '// &
+          trim(scene%predictor%config%method)//' + '//trim(merge('FFT Helmholtz   ', scene%predictor%config%preconditioner, &
+          scene%predictor%config%preconditioner == 'user'))//', matrices built '//int_text(scene%predictor%builds)// &
+          ' times ('//real_text(scene%predictor%build_seconds)//' s), solves '//real_text(scene%predictor%solve_seconds)// &
+          ' s; last step hypre iterations '//int_text(scene%predicted%sweeps)//', relative residual '// &
+          real_text(scene%predicted%residual)//', slip '//real_text(scene%projected%largest_change)// &
+          ', cut-cell divergence '//real_text(scene%divergence)//' 1/s')
+    else
+      call log_line('immersed scene: last step sweeps '//int_text(scene%predicted%sweeps)//' (plane exchanges '// &
+                    int_text(scene%predicted%exchanges)//')'// &
+                    ', residual '//real_text(scene%predicted%residual)//', slip '// &
+                    real_text(scene%projected%largest_change)//', cut-cell divergence '//real_text(scene%divergence)//' 1/s')
+    end if
   end subroutine loads_close
 end module immersed_scene
