@@ -27,7 +27,8 @@
 module immersed_predictor
   use agglo_kinds, only: wp
   use error_handling, only: fatal
-  use parallel_env, only: global_max
+  use mpi_f08, only: MPI_Allreduce, MPI_IN_PLACE, MPI_LOGICAL, MPI_LAND
+  use parallel_env, only: world, global_max
   use text_format, only: int_text
   use wall_clock, only: wall_time
   use fluid_grid, only: fluid_grid_t, allocate_field
@@ -69,10 +70,12 @@ module immersed_predictor
     real(wp) :: alpha = -1                            !< nu dt / 2 the matrices hold
     logical :: stale = .true.                         !< the matrices predate the last classification
     logical :: has_guess = .false.                    !< system(:)%guess holds this step's first guess
+    logical :: reuse_structure = .true.               !< replace only the values when the structure stands
     type(imposition_report_t) :: report               !< the last solve: sweeps = most iterations of a
                                                       !< component, residual = largest relative residual
     real(wp) :: build_seconds = 0, solve_seconds = 0  !< wall time of building and solving, summed
-    integer :: builds = 0                             !< matrices built (collective creations)
+    integer :: builds = 0                             !< matrices built (after a classification)
+    integer :: updates = 0                            !< of those (per component), values only (same structure)
   contains
     procedure :: solve => immersed_predictor_solve
   end type immersed_predictor_t
@@ -176,13 +179,32 @@ contains
   end subroutine immersed_predictor_solve
 
   !> The rows of component c for the current classification, and its hypre solver (collective).
+  !> When the new rows have the old ones' structure (the same ghost and interior nodes, the same
+  !> stencil nodes: a body moved by a fraction of a cell without changing any node's status) only
+  !> the values are replaced; otherwise the solver is created again.
   subroutine build_system(self, grid, c, alpha)
     type(immersed_predictor_t), intent(inout) :: self
     type(fluid_grid_t), intent(in) :: grid
     integer, intent(in) :: c
     real(wp), intent(in) :: alpha
+    integer, allocatable :: old_start(:), old_columns(:)
+    logical :: same_structure
     integer :: g, m
+    if (allocated(self%system(c)%rows%row_start)) then
+      old_start = self%system(c)%rows%row_start
+      old_columns = self%system(c)%rows%columns(1:old_start(size(old_start)) - 1)
+    end if
     call assemble_rows(self, grid, c, alpha)
+    same_structure = .false.
+    if (allocated(old_start) .and. self%reuse_structure) then
+      associate (rows => self%system(c)%rows)
+        same_structure = size(old_start) == size(rows%row_start)
+        if (same_structure) same_structure = all(old_start == rows%row_start)
+        if (same_structure) same_structure = all(old_columns == rows%columns(1:size(old_columns)))
+      end associate
+    end if
+    ! Every rank must take the same branch (creation and update are collective).
+    same_structure = global_all(same_structure)
     associate (sys => self%system(c), nodes => self%ibm%geometry%component(c))
       if (.not. associated(sys%preconditioner)) allocate(sys%preconditioner)
       if (.not. allocated(sys%rhs)) then
@@ -193,13 +215,23 @@ contains
       sys%preconditioner%replaced_rows = [sys%ghost_rows, sys%interior_rows]
       sys%preconditioner%replaced_diagonal = [(sys%rows%values(sys%rows%row_start(sys%ghost_rows(g))), &
                                                g = 1, nodes%n_ghost), (1.0_wp, m = 1, nodes%n_interior)]
-      if (self%config%preconditioner == 'user') then
+      if (same_structure) then
+        call linear_solver_update_values(sys%solver, sys%rows)
+        self%updates = self%updates + 1
+      else if (self%config%preconditioner == 'user') then
         call linear_solver_create(sys%solver, sys%rows, self%config, sys%preconditioner)
       else
         call linear_solver_create(sys%solver, sys%rows, self%config)
       end if
     end associate
   end subroutine build_system
+
+  !> True on every rank when flag is true on every rank (collective).
+  logical function global_all(flag)
+    logical, intent(in) :: flag
+    global_all = flag
+    call MPI_Allreduce(MPI_IN_PLACE, global_all, 1, MPI_LOGICAL, MPI_LAND, world)
+  end function global_all
 
   !> New Helmholtz values (a new dt) on the same structure (the body rows do not depend on dt).
   subroutine helmholtz_values(self, grid, c, alpha)
@@ -220,15 +252,15 @@ contains
     integer, intent(in) :: c
     real(wp), intent(in) :: alpha
     type(sparse_rows_t) :: helmholtz
-    integer, allocatable :: kind(:), in_list(:)
+    integer, allocatable :: row_kind(:), in_list(:)
     integer :: n_local, r, g, m, entry, corner, first
     integer, parameter :: fluid_row = 0, ghost_row = 1, interior_row = 2
     real(wp) :: self_weight
 
     call helmholtz_rows_create(grid, alpha, helmholtz)
     n_local = rows_local_count(helmholtz)
-    allocate(kind(n_local), in_list(n_local))
-    kind = fluid_row
+    allocate(row_kind(n_local), in_list(n_local))
+    row_kind = fluid_row
     in_list = 0
     associate (nodes => self%ibm%geometry%component(c), sys => self%system(c))
       if (allocated(sys%ghost_rows)) deallocate(sys%ghost_rows, sys%interior_rows, sys%b_ghost, sys%b_interior)
@@ -236,12 +268,12 @@ contains
       allocate(sys%b_ghost(nodes%n_ghost), sys%b_interior(nodes%n_interior))
       do g = 1, nodes%n_ghost
         sys%ghost_rows(g) = local_row(grid, nodes%ghost(g)%node)
-        kind(sys%ghost_rows(g)) = ghost_row
+        row_kind(sys%ghost_rows(g)) = ghost_row
         in_list(sys%ghost_rows(g)) = g
       end do
       do m = 1, nodes%n_interior
         sys%interior_rows(m) = local_row(grid, nodes%interior(:, m))
-        kind(sys%interior_rows(m)) = interior_row
+        row_kind(sys%interior_rows(m)) = interior_row
         in_list(sys%interior_rows(m)) = m
       end do
 
@@ -254,7 +286,7 @@ contains
       entry = 0
       do r = 1, n_local
         sys%rows%row_start(r) = entry + 1
-        select case (kind(r))
+        select case (row_kind(r))
         case (fluid_row)
           first = helmholtz%row_start(r)
           sys%rows%columns(entry + 1:entry + 7) = helmholtz%columns(first:first + 6)

@@ -274,7 +274,8 @@ contains
       call log_line('immersed scene: Crank-Nicolson predictor with the body rows: '// &
           trim(scene%predictor%config%method)//' + '//trim(merge('FFT Helmholtz   ', scene%predictor%config%preconditioner, &
           scene%predictor%config%preconditioner == 'user'))//', matrices built '//int_text(scene%predictor%builds)// &
-          ' times ('//real_text(scene%predictor%build_seconds)//' s), solves '//real_text(scene%predictor%solve_seconds)// &
+          ' times in '//real_text(scene%predictor%build_seconds)//' s ('//int_text(scene%predictor%updates)// &
+          ' of the component matrices only had new values), solves '//real_text(scene%predictor%solve_seconds)// &
           ' s; last step hypre iterations '//int_text(scene%predicted%sweeps)//', relative residual '// &
           real_text(scene%predicted%residual)//', slip '//real_text(scene%projected%largest_change)// &
           ', cut-cell divergence '//real_text(scene%divergence)//' 1/s')
