@@ -127,14 +127,12 @@ contains
         ' m) apart (the minimum-image convention of the periodic box)')
   end subroutine check_pair_in_box
 
-  !> Bodies in prescribed motion: resolved fluid, explicit diffusion (the Eswaran-Pope forcing may drive the box).
+  !> Bodies in prescribed motion: resolved fluid (either viscous scheme: with Crank-Nicolson the
+  !> predictor's system holds the body rows, immersed_predictor; any forcing).
   subroutine check_prescribed_cross(cfg)
     type(agglo_config_t), intent(in) :: cfg
     if (cfg%scene%fluid /= 'resolved') call input_error('scene', 'particles', '''prescribed'' with fluid = '''// &
         trim(cfg%scene%fluid)//'''', 'fluid = ''resolved'' (bodies in prescribed motion need the resolved fluid)')
-    if (cfg%fluid%viscous_scheme == 'crank_nicolson') call input_error('fluid', 'viscous_scheme', &
-        '''crank_nicolson'' with &scene particles = ''prescribed''', '''explicit'' (the Crank-Nicolson '// &
-        'predictor with the immersed-boundary ghost rows is not available yet)')
   end subroutine check_prescribed_cross
 
   !> Resolved fluid: the grid must split into equal slabs along z and y (pencil transposes of the FFT).

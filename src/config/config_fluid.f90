@@ -1,7 +1,8 @@
 !> Namelist group &fluid: fluid properties, discretisation options and the initial field.
 module config_fluid
   use agglo_kinds, only: wp
-  use deck_file, only: deck_t, check_namelist_read, require_positive, require_nonnegative, require_option
+  use deck_file, only: deck_t, check_namelist_read, require_positive, require_nonnegative, require_option, require_range, &
+                       int_text
   use error_handling, only: input_error
   implicit none
   private
@@ -17,13 +18,18 @@ module config_fluid
     real(wp) :: init_peak_wavenumber = 2.0_wp      !< spectrum peak of 'random', in units of 2 pi / length_x
     character(len=16) :: fft_planning = 'estimate' !< 'estimate' (reproducible) | 'measure' (faster plans, not bit-reproducible)
     character(len=16) :: pressure_scheme = 'non_incremental'  !< 'non_incremental' | 'incremental' (fluid_solver)
+    !> The Crank-Nicolson predictor with immersed bodies (hypre, immersed_predictor): the relative
+    !> residual ||b - A u*|| / ||b|| it stops at, and the iterations before the run stops.
+    real(wp) :: predictor_tolerance = 1.0e-8_wp
+    integer :: predictor_max_iterations = 200
   end type fluid_config_t
 
-  real(wp) :: density, viscosity, init_amplitude, init_peak_wavenumber
+  real(wp) :: density, viscosity, init_amplitude, init_peak_wavenumber, predictor_tolerance
+  integer :: predictor_max_iterations
   character(len=16) :: viscous_scheme, init, fft_planning, pressure_scheme
   character(len=256) :: init_file
   namelist /fluid/ density, viscosity, viscous_scheme, init, init_file, init_amplitude, init_peak_wavenumber, &
-                  fft_planning, pressure_scheme
+                  fft_planning, pressure_scheme, predictor_tolerance, predictor_max_iterations
 
 contains
 
@@ -33,6 +39,7 @@ contains
     init = cfg%init; init_file = cfg%init_file; init_amplitude = cfg%init_amplitude
     init_peak_wavenumber = cfg%init_peak_wavenumber; fft_planning = cfg%fft_planning
     pressure_scheme = cfg%pressure_scheme
+    predictor_tolerance = cfg%predictor_tolerance; predictor_max_iterations = cfg%predictor_max_iterations
   end subroutine to_namelist
 
   subroutine from_namelist(cfg)
@@ -41,6 +48,7 @@ contains
     cfg%init = init; cfg%init_file = init_file; cfg%init_amplitude = init_amplitude
     cfg%init_peak_wavenumber = init_peak_wavenumber; cfg%fft_planning = fft_planning
     cfg%pressure_scheme = pressure_scheme
+    cfg%predictor_tolerance = predictor_tolerance; cfg%predictor_max_iterations = predictor_max_iterations
   end subroutine from_namelist
 
   subroutine read_fluid_group(deck, cfg)
@@ -65,6 +73,9 @@ contains
     call require_option('fluid', 'fft_planning', cfg%fft_planning, [character(len=16) :: 'estimate', 'measure'])
     call require_option('fluid', 'pressure_scheme', cfg%pressure_scheme, &
                         [character(len=16) :: 'non_incremental', 'incremental'])
+    call require_range('fluid', 'predictor_tolerance', cfg%predictor_tolerance, 1.0e-14_wp, 1.0e-2_wp)
+    if (cfg%predictor_max_iterations < 1 .or. cfg%predictor_max_iterations > 10000) call input_error('fluid', &
+        'predictor_max_iterations', int_text(cfg%predictor_max_iterations), '1 to 10000')
     if (cfg%init == 'file' .and. len_trim(cfg%init_file) == 0) call input_error('fluid', 'init_file', &
         '''''', 'the path of an Agglo field snapshot or checkpoint (needed by init = ''file'')')
   end subroutine check_fluid_group

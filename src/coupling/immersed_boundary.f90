@@ -57,6 +57,9 @@ module immersed_boundary
     type(status_field_t) :: field(3)
   end type status_fields_t
 
+  !> The rigid velocity and the load bookkeeping of one node, for a solver that imposes the body rows itself
+  public :: rigid_velocity, account
+
   !> Lever arms r (minimum image of the point - the body's centre, m) of one component's nodes,
   !> computed once per placement so that an imposition costs only U + Omega x r per node.
   type :: lever_arms_t

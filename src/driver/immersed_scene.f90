@@ -5,6 +5,8 @@
 !> and the per-step time series of every body's force and torque (bodies_loads.dat, docs/outputs.md):
 !> both load methods every step, the momentum balance (immersed_boundary) and the face sum
 !> (immersed_surface_loads); load_method picks the one written as the force and torque.
+!> With &fluid viscous_scheme = 'crank_nicolson' the predictor's system holds the body rows
+!> (immersed_predictor, solved with hypre), so u* needs no imposition.
 !>
 !> Prescribed motion of body n (lab frame): centre c(t) = c0 + U t + A sin(2 pi f t), velocity
 !> U + 2 pi f A cos(2 pi f t), constant angular velocity Omega, orientation q(t) = rot(Omega t) q0.
@@ -19,6 +21,9 @@ module immersed_scene
   use timer_registry, only: timer_register, timer_tic, timer_toc
   use fluid_grid, only: fluid_grid_t, allocate_field
   use fluid_solver, only: fluid_solver_t, fluid_predict, fluid_project, fluid_finish_step
+  use hypre_solver, only: linear_solver_config_t
+  use immersed_predictor, only: immersed_predictor_t, immersed_predictor_create, immersed_predictor_reclassified, &
+                                immersed_predictor_first_guess, default_predictor_config
   use quaternion, only: quaternion_from_axis_angle, quaternion_product, quaternion_normalise
   use spheroid, only: spheroid_t, make_spheroid
   use icosphere_mesh, only: icosphere_mesh_t, build_icosphere_mesh
@@ -58,6 +63,8 @@ module immersed_scene
     real(wp), allocatable :: momentum_force(:, :), momentum_torque(:, :)   !< (3, n) by momentum balance
     real(wp), allocatable :: surface_force(:, :), surface_torque(:, :)     !< (3, n) by the face sum
     type(imposition_report_t) :: predicted, projected    !< the two impositions of the last step
+    type(immersed_predictor_t) :: predictor    !< the Crank-Nicolson predictor with the body rows
+    logical :: guess_from_velocity = .true.    !< its Krylov solve starts from u^n (else from b)
     real(wp) :: divergence = 0                 !< 1/s, largest |div u| after the re-imposition (cut cells)
     integer :: timer = 0
     integer :: loads_unit = 0
@@ -71,7 +78,10 @@ contains
   !> surface_level the face sum's icosphere level (default 2, 320 faces; -1: no face sum, its columns
   !> zero, for validation cases that need only the momentum balance: the face sum costs about 2 us
   !> per face per step, 8 trilinear evaluations of the probes).
-  subroutine immersed_scene_create(scene, solver, motion, settings, driving_force, load_method, surface_level)
+  !> predictor_config: the hypre solve of the Crank-Nicolson predictor (default
+  !> default_predictor_config(1e-8, 200)); unused with explicit diffusion.
+  subroutine immersed_scene_create(scene, solver, motion, settings, driving_force, load_method, surface_level, &
+                                   predictor_config)
     type(immersed_scene_t), intent(inout) :: scene
     type(fluid_solver_t), intent(inout) :: solver
     type(prescribed_motion_t), intent(in) :: motion(:)
@@ -79,6 +89,7 @@ contains
     real(wp), intent(in) :: driving_force(3)
     character(len=*), intent(in), optional :: load_method
     integer, intent(in), optional :: surface_level
+    type(linear_solver_config_t), intent(in), optional :: predictor_config
     integer :: n
     scene%motion = motion
     scene%ibm%settings = settings
@@ -111,6 +122,13 @@ contains
     scene%momentum_force = scene%force; scene%momentum_torque = scene%force
     scene%surface_force = scene%force; scene%surface_torque = scene%force
     call place_bodies(scene, solver, solver%time, classify=.true.)
+    if (solver%crank_nicolson) then
+      if (present(predictor_config)) then
+        call immersed_predictor_create(scene%predictor, solver%grid, predictor_config)
+      else
+        call immersed_predictor_create(scene%predictor, solver%grid, default_predictor_config(1.0e-8_wp, 200))
+      end if
+    end if
     scene%timer = timer_register('immersed boundary')
   end subroutine immersed_scene_create
 
@@ -120,7 +138,7 @@ contains
   !> would only add rho f over the body's nodes to its load (the drive, a mean pressure gradient,
   !> does act on the body and stays everywhere).
   subroutine immersed_step(scene, solver, dt, fluid_force_u, fluid_force_v, fluid_force_w)
-    type(immersed_scene_t), intent(inout) :: scene
+    type(immersed_scene_t), intent(inout), target :: scene
     type(fluid_solver_t), intent(inout) :: solver
     real(wp), intent(in) :: dt
     real(wp), intent(in), optional :: fluid_force_u(0:, 0:, 0:), fluid_force_v(0:, 0:, 0:), fluid_force_w(0:, 0:, 0:)
@@ -135,11 +153,23 @@ contains
     end if
     call ibm_begin_step(scene%ibm, solver%grid, solver%u, solver%v, solver%w)
     call timer_toc(scene%timer)
-    call fluid_predict(solver, dt, force_u=scene%force_u, force_v=scene%force_v, force_w=scene%force_w)
-    call timer_tic(scene%timer)
-    call ibm_impose(scene%ibm, solver%grid, solver%explicit_old_u, solver%explicit_old_v, solver%explicit_old_w, &
-                    scene%predicted)
-    call timer_toc(scene%timer)
+    if (solver%crank_nicolson) then
+      ! The body rows are part of the predictor's system (the predictor's time counts as the fluid's).
+      if (scene%moving) call immersed_predictor_reclassified(scene%predictor)
+      scene%predictor%ibm => scene%ibm
+      if (scene%guess_from_velocity) call immersed_predictor_first_guess(scene%predictor, solver%grid, solver%u, &
+                                                                         solver%v, solver%w)
+      call fluid_predict(solver, dt, scene%predictor, force_u=scene%force_u, force_v=scene%force_v, &
+                         force_w=scene%force_w)
+      scene%predictor%ibm => null()
+      scene%predicted = scene%predictor%report
+    else
+      call fluid_predict(solver, dt, force_u=scene%force_u, force_v=scene%force_v, force_w=scene%force_w)
+      call timer_tic(scene%timer)
+      call ibm_impose(scene%ibm, solver%grid, solver%explicit_old_u, solver%explicit_old_v, solver%explicit_old_w, &
+                      scene%predicted)
+      call timer_toc(scene%timer)
+    end if
     call fluid_project(solver)
     call timer_tic(scene%timer)
     call ibm_impose(scene%ibm, solver%grid, solver%u, solver%v, solver%w, scene%projected)
@@ -303,10 +333,22 @@ contains
     integer :: n
     if (scene%loads_opened) close(scene%loads_unit)
     scene%loads_opened = .false.
-    call log_line('immersed scene: last step sweeps '//int_text(scene%predicted%sweeps)//' (plane exchanges '// &
-                  int_text(scene%predicted%exchanges)//')'// &
-                  ', residual '//real_text(scene%predicted%residual)//', slip '// &
-                  real_text(scene%projected%largest_change)//', cut-cell divergence '//real_text(scene%divergence)//' 1/s')
+    if (scene%predictor%builds > 0) then
+      ! Crank-Nicolson: the predicted report is the hypre solve's (immersed_predictor).
+      call log_line('immersed scene: Crank-Nicolson predictor with the body rows: '// &
+          trim(scene%predictor%config%method)//' + '//trim(merge('FFT Helmholtz   ', scene%predictor%config%preconditioner, &
+          scene%predictor%config%preconditioner == 'user'))//', matrices built '//int_text(scene%predictor%builds)// &
+          ' times in '//real_text(scene%predictor%build_seconds)//' s ('//int_text(scene%predictor%updates)// &
+          ' of the component matrices only had new values), solves '//real_text(scene%predictor%solve_seconds)// &
+          ' s; last step hypre iterations '//int_text(scene%predicted%sweeps)//', relative residual '// &
+          real_text(scene%predicted%residual)//', slip '//real_text(scene%projected%largest_change)// &
+          ', cut-cell divergence '//real_text(scene%divergence)//' 1/s')
+    else
+      call log_line('immersed scene: last step sweeps '//int_text(scene%predicted%sweeps)//' (plane exchanges '// &
+                    int_text(scene%predicted%exchanges)//')'// &
+                    ', residual '//real_text(scene%predicted%residual)//', slip '// &
+                    real_text(scene%projected%largest_change)//', cut-cell divergence '//real_text(scene%divergence)//' 1/s')
+    end if
     do n = 1, size(scene%motion)
       call log_line('immersed scene: body '//int_text(n)//' last step |F| momentum '// &
                     real_text(norm2(scene%momentum_force(:, n)))//' N, surface '//real_text(norm2(scene%surface_force(:, n)))// &

@@ -29,6 +29,7 @@ module resolved_scene
   use parallel_env, only: global_sum
   use immersed_boundary, only: ibm_settings_t, status_change_summary
   use immersed_geometry, only: fallback_count
+  use immersed_predictor, only: default_predictor_config
   use immersed_scene, only: immersed_scene_t, immersed_scene_create, immersed_step, motions_from_config, &
                             loads_open, loads_write, loads_close
   implicit none
@@ -105,7 +106,9 @@ contains
         call progress_line(solver%step, solver%time, dt, (wall_time() - step_wall) / cfg%run%progress_interval, &
             min(real(cfg%run%max_steps - solver%step, wp), (cfg%run%end_time - solver%time) / dt))
         step_wall = wall_time()
-        if (with_bodies) call log_line('immersed boundary: sweeps '//int_text(bodies%predicted%sweeps)// &
+        ! With Crank-Nicolson the predicted report is the hypre solve's (immersed_predictor).
+        if (with_bodies) call log_line('immersed boundary: '// &
+            trim(merge('hypre iterations', 'sweeps          ', solver%crank_nicolson))//' '//int_text(bodies%predicted%sweeps)// &
             ', residual '//real_text(bodies%predicted%residual)//', slip after projection '// &
             real_text(bodies%projected%largest_change)//', cut-cell divergence '//real_text(bodies%divergence)// &
             ' 1/s, image-point fallbacks '//int_text(fallbacks))
@@ -146,7 +149,9 @@ contains
       settings%max_sweeps = cfg%bodies%max_sweeps
       settings%fluid_density = cfg%fluid%density
       call immersed_scene_create(bodies, solver, motions_from_config(cfg%bodies, solver%grid), settings, &
-                                 cfg%bodies%driving_force, cfg%bodies%load_method, cfg%bodies%mesh_level)
+                                 cfg%bodies%driving_force, cfg%bodies%load_method, cfg%bodies%mesh_level, &
+                                 predictor_config=default_predictor_config(cfg%fluid%predictor_tolerance, &
+                                 cfg%fluid%predictor_max_iterations))
       call loads_open(bodies, run_file('bodies_loads.dat'), append=cfg%run%restart, last_step=solver%step)
       call log_line('immersed boundary: '//trim(cfg%scene%ibm_coupling)//' coupling, '// &
           int_text(cfg%bodies%count)//' bodies, loads every step in '//run_file('bodies_loads.dat'))

@@ -23,6 +23,7 @@ module sphere_array_case
   use spheroid, only: make_spheroid
   use icosphere_mesh, only: build_icosphere_mesh
   use immersed_boundary, only: ibm_settings_t
+  use hypre_solver, only: linear_solver_config_t
   use immersed_scene, only: prescribed_motion_t, immersed_scene_t, immersed_scene_create, immersed_step
   implicit none
   private
@@ -40,6 +41,9 @@ module sphere_array_case
     logical :: rotating = .false.                !< rotating sphere, no drive, steady torque
     integer :: mesh_level = -1                   !< ghost nodes see the icosphere of this level ('mesh'); -1 analytic
     integer :: surface_level = -1                !< icosphere level of the face-sum loads; -1 none (momentum only)
+    character(len=16) :: viscous_scheme = 'explicit'   !< or 'crank_nicolson' (the predictor with the body rows)
+    type(linear_solver_config_t) :: predictor = linear_solver_config_t(method='bicgstab', preconditioner='user', &
+                                                                       tolerance=1.0e-8_wp, max_iterations=200)
   end type sphere_array_case_t
 
   type :: sphere_array_result_t
@@ -84,7 +88,7 @@ contains
     grid_cfg = grid_config_t(nx=case%cells, ny=case%cells, nz=case%cells, length_x=box, length_y=box, length_z=box)
     fluid_cfg%density = density
     fluid_cfg%viscosity = viscosity
-    fluid_cfg%viscous_scheme = 'explicit'
+    fluid_cfg%viscous_scheme = case%viscous_scheme
     fluid_cfg%pressure_scheme = 'incremental'
     call fluid_solver_create(solver, grid_cfg, fluid_cfg)
     solver%u = 0; solver%v = 0; solver%w = 0; solver%pressure = 0
@@ -104,7 +108,7 @@ contains
       motion(1)%angular_velocity = [0.0_wp, 0.0_wp, 1.0e-7_wp / radius]
     end if
     call immersed_scene_create(scene, solver, motion, settings, [drive_x, 0.0_wp, 0.0_wp], &
-                               surface_level=case%surface_level)
+                               surface_level=case%surface_level, predictor_config=case%predictor)
 
     dt = case%viscous_number * solver%grid%dx**2 / viscosity
     u_old = 0

@@ -11,8 +11,8 @@
 #    sphere 16 cells lower, which crosses no periodic boundary (the periodic grid is invariant under
 #    a shift by whole cells), and those of 2 ranks equal 1 rank's; the run logs its status changes
 #    and load jumps;
-#  - refused decks, before any step, with a message naming the variable: Crank-Nicolson diffusion
-#    with bodies, an unknown load_method, a disk thinner than 4 cells (the message gives the grid).
+#  - refused decks, before any step, with a message naming the variable: an unknown load_method,
+#    a disk thinner than 4 cells (the message gives the grid). (Crank-Nicolson: test_immersed_cn_runs.sh.)
 # Prints PASS/FAIL lines; works in a temporary directory.
 set -u
 AGGLO=${AGGLO:?AGGLO must be the agglo executable}
@@ -124,8 +124,6 @@ refused() { # test name, deck file, expected text in the message
     echo "FAIL immersed_runs/$1: message without '$3': $(tail -n 3 "$2.out" | head -c 300)"
   fi
 }
-deck cn implicit crank_nicolson momentum needle 32 > cn.nml
-refused refuses_crank_nicolson_with_bodies cn.nml 'viscous_scheme'
 deck faces implicit explicit faces needle 32 > faces.nml
 refused refuses_unknown_load_method faces.nml 'load_method'
 deck thin implicit explicit momentum disk 16 > thin.nml

@@ -1,0 +1,399 @@
+!> The Crank-Nicolson momentum predictor with the immersed-boundary rows, solved with hypre
+!> (docs/theory.md, "Linear solver (hypre)"; issue: the implicit coupling with Crank-Nicolson).
+!>
+!> Each velocity component c of the predictor satisfies, on its own staggered nodes,
+!>   fluid node:     (I - alpha L_h) u* = b                           (the Helmholtz row, alpha = nu dt / 2)
+!>   ghost node G:   (1 + kappa w_G) u_G + kappa sum_{j /= G} w_j u_j = (1 + kappa) u_B   (Eq. 7)
+!>   interior node:  u = u_rigid(node)
+!> with b the right-hand side fluid_predict assembles, u_B = U + Omega x r at the ghost's surface
+!> point and the stencil, weights and kappa of immersed_geometry (pure mirror, kappa = 1, for the
+!> implicit coupling; the 1.5-cell image point, kappa <= 1, for the explicit one). The ghost rows'
+!> stencils may hold fluid nodes, so the whole system is solved at once: replacing the rows of an
+!> FFT Crank-Nicolson solution afterwards would not reach this fixed point (issue 10).
+!>
+!> The system is non-symmetric (the ghost rows); it is solved per component with a hypre Krylov
+!> method (hypre_solver), by default BiCGSTAB preconditioned by the FFT Helmholtz solve with a
+!> Jacobi correction on the replaced rows (hypre_fft_preconditioner), chosen by measurement
+!> (docs/performance.md, "Crank-Nicolson with the immersed boundary"). The matrices are built
+!> when the nodes are classified again (bodies moved) and their values replaced when alpha
+!> changes (a new dt); the right-hand side every step.
+!>
+!> Loads: the momentum the body rows add is what the momentum-balance loads of immersed_boundary
+!> need. Summed over the periodic box, sum (I - alpha L_h) u = sum u, so the system adds to the
+!> fluid rho dV sum_nodes (u* - b) = rho dV sum_{ghost, interior} [(I - alpha L_h) u* - b]: each
+!> ghost and interior node adds its Helmholtz-row residual, as if its value had been imposed on
+!> the value (I - alpha L_h) u* = b would have given it. That change goes to the step's bookkeeping
+!> (immersed_boundary account), so the box's momentum budget closes as with explicit diffusion.
+module immersed_predictor
+  use agglo_kinds, only: wp
+  use error_handling, only: fatal
+  use mpi_f08, only: MPI_Allreduce, MPI_IN_PLACE, MPI_LOGICAL, MPI_LAND
+  use parallel_env, only: world, global_max
+  use text_format, only: int_text
+  use wall_clock, only: wall_time
+  use fluid_grid, only: fluid_grid_t, allocate_field
+  use halo_exchange, only: exchange_slab_halos
+  use poisson_fft, only: poisson_fft_t, poisson_create
+  use predictor_solver, only: predictor_solver_t, apply_predictor_operator
+  use hypre_solver, only: sparse_rows_t, linear_solver_config_t, linear_solver_t, solve_status_t, &
+                          linear_solver_create, linear_solver_update_values, linear_solver_solve, rows_local_count
+  use hypre_helmholtz_rows, only: global_row, helmholtz_rows_create, field_to_rows, rows_to_field
+  use hypre_fft_preconditioner, only: fft_helmholtz_preconditioner_t, fft_preconditioner_create
+  use immersed_boundary, only: immersed_boundary_t, imposition_report_t, rigid_velocity, account
+  implicit none
+  private
+  public :: immersed_predictor_t, immersed_predictor_create, immersed_predictor_reclassified, &
+            immersed_predictor_first_guess, default_predictor_config
+
+  character(len=*), parameter :: component_names(3) = ['u', 'v', 'w']
+
+  !> The system of one velocity component.
+  type :: component_system_t
+    type(sparse_rows_t) :: rows
+    type(linear_solver_t) :: solver
+    type(fft_helmholtz_preconditioner_t), pointer :: preconditioner => null()   !< heap: hypre keeps its address
+    integer, allocatable :: ghost_rows(:), interior_rows(:)   !< local rows of the ghost and interior nodes
+    real(wp), allocatable :: rhs(:), solution(:)              !< this rank's rows
+    real(wp), allocatable :: guess(:)                         !< the Krylov solve's first guess (u^n)
+    real(wp), allocatable :: b_ghost(:), b_interior(:)        !< b of fluid_predict at those rows
+  end type component_system_t
+
+  type, extends(predictor_solver_t) :: immersed_predictor_t
+    !> The bodies, their classification and velocities at t^{n+1}; the caller points it at its
+    !> immersed boundary before each fluid_predict (the predictor adds the rows' momentum to it).
+    type(immersed_boundary_t), pointer :: ibm => null()
+    type(linear_solver_config_t) :: config
+    type(component_system_t) :: system(3)
+    type(fluid_grid_t), pointer :: grid => null()     !< a copy of the fluid grid (heap) for the preconditioner
+    type(poisson_fft_t), pointer :: fft => null()     !< the preconditioner's own FFT (heap)
+    real(wp), allocatable :: work(:, :, :)            !< (I - alpha L_h) u* for the loads
+    real(wp) :: alpha = -1                            !< nu dt / 2 the matrices hold
+    logical :: stale = .true.                         !< the matrices predate the last classification
+    logical :: has_guess = .false.                    !< system(:)%guess holds this step's first guess
+    logical :: reuse_structure = .true.               !< replace only the values when the structure stands
+    type(imposition_report_t) :: report               !< the last solve: sweeps = most iterations of a
+                                                      !< component, residual = largest relative residual
+    real(wp) :: build_seconds = 0, solve_seconds = 0  !< wall time of building and solving, summed
+    integer :: builds = 0                             !< matrices built (after a classification)
+    integer :: updates = 0                            !< of those (per component), values only (same structure)
+  contains
+    procedure :: solve => immersed_predictor_solve
+  end type immersed_predictor_t
+
+contains
+
+  !> BiCGSTAB with the FFT Helmholtz preconditioner (the measured choice, docs/performance.md).
+  pure function default_predictor_config(tolerance, max_iterations) result(config)
+    real(wp), intent(in) :: tolerance
+    integer, intent(in) :: max_iterations
+    type(linear_solver_config_t) :: config
+    config%method = 'bicgstab'
+    config%preconditioner = 'user'
+    config%tolerance = tolerance
+    config%max_iterations = max_iterations
+  end function default_predictor_config
+
+  !> Prepare the predictor for the fluid grid (collective: the preconditioner's FFT plans).
+  !> config%preconditioner = 'user' means the FFT Helmholtz preconditioner.
+  subroutine immersed_predictor_create(predictor, grid, config)
+    type(immersed_predictor_t), intent(inout) :: predictor
+    type(fluid_grid_t), intent(in) :: grid
+    type(linear_solver_config_t), intent(in) :: config
+    integer :: c
+    predictor%config = config
+    if (.not. associated(predictor%grid)) allocate(predictor%grid, predictor%fft)
+    predictor%grid = grid
+    call poisson_create(predictor%fft, predictor%grid, 'estimate')
+    call allocate_field(grid, predictor%work)
+    do c = 1, 3
+      if (allocated(predictor%system(c)%guess)) deallocate(predictor%system(c)%guess)
+      allocate(predictor%system(c)%guess(grid%nx * grid%ny * grid%nz_local))
+    end do
+    predictor%has_guess = .false.
+    predictor%stale = .true.
+    predictor%alpha = -1
+  end subroutine immersed_predictor_create
+
+  !> The nodes were classified again (the bodies moved): the next solve builds new matrices.
+  subroutine immersed_predictor_reclassified(predictor)
+    type(immersed_predictor_t), intent(inout) :: predictor
+    predictor%stale = .true.
+  end subroutine immersed_predictor_reclassified
+
+  !> The first guess of the next solve: u^n (near a steady state u* differs from u^n by far less
+  !> than from b, which lacks alpha L u*; measured in docs/performance.md). Without it the solve
+  !> starts from b with the body rows' values.
+  subroutine immersed_predictor_first_guess(predictor, grid, u, v, w)
+    type(immersed_predictor_t), intent(inout) :: predictor
+    type(fluid_grid_t), intent(in) :: grid
+    real(wp), intent(in) :: u(0:, 0:, 0:), v(0:, 0:, 0:), w(0:, 0:, 0:)
+    call field_to_rows(grid, u, predictor%system(1)%guess)
+    call field_to_rows(grid, v, predictor%system(2)%guess)
+    call field_to_rows(grid, w, predictor%system(3)%guess)
+    predictor%has_guess = .true.
+  end subroutine immersed_predictor_first_guess
+
+  !> A u* = b with the body rows (collective). On entry u, v, w hold b, on exit u* (interiors;
+  !> halos current). The momentum of the body rows goes to predictor%ibm's load bookkeeping.
+  !> poisson is not used: hypre calls the preconditioner through an address it keeps between
+  !> steps, so the preconditioner has its own FFT (predictor%fft).
+  subroutine immersed_predictor_solve(self, grid, poisson, alpha, u, v, w)
+    class(immersed_predictor_t), intent(inout) :: self
+    type(fluid_grid_t), intent(inout) :: grid
+    type(poisson_fft_t), intent(inout) :: poisson
+    real(wp), intent(in) :: alpha
+    real(wp), intent(inout) :: u(0:, 0:, 0:), v(0:, 0:, 0:), w(0:, 0:, 0:)
+    real(wp) :: t0, scale
+    integer :: c
+    if (.not. associated(self%ibm)) call fatal('immersed predictor: no immersed boundary given')
+    if (.not. (alpha > 0.0_wp)) call fatal('immersed predictor: needs the Crank-Nicolson predictor (alpha > 0)')
+    t0 = wall_time()
+    if (self%stale) then
+      do c = 1, 3
+        call build_system(self, grid, c, alpha)
+      end do
+      self%builds = self%builds + 1
+    else if (alpha /= self%alpha) then
+      do c = 1, 3
+        call helmholtz_values(self, grid, c, alpha)
+      end do
+    end if
+    self%alpha = alpha
+    self%stale = .false.
+    self%build_seconds = self%build_seconds + wall_time() - t0
+
+    t0 = wall_time()
+    self%report = imposition_report_t()
+    scale = 0
+    call solve_component(self, grid, 1, u, scale)
+    call solve_component(self, grid, 2, v, scale)
+    call solve_component(self, grid, 3, w, scale)
+    self%report%velocity_scale = max(global_max(scale), tiny(1.0_wp))
+    call exchange_slab_halos(grid%slab, u, v, w)
+    call account_rows(self, grid, 1, alpha, u)
+    call account_rows(self, grid, 2, alpha, v)
+    call account_rows(self, grid, 3, alpha, w)
+    self%report%largest_change = global_max(self%report%largest_change) / self%report%velocity_scale
+    self%has_guess = .false.
+    self%solve_seconds = self%solve_seconds + wall_time() - t0
+  end subroutine immersed_predictor_solve
+
+  !> The rows of component c for the current classification, and its hypre solver (collective).
+  !> When the new rows have the old ones' structure (the same ghost and interior nodes, the same
+  !> stencil nodes: a body moved by a fraction of a cell without changing any node's status) only
+  !> the values are replaced; otherwise the solver is created again.
+  subroutine build_system(self, grid, c, alpha)
+    type(immersed_predictor_t), intent(inout) :: self
+    type(fluid_grid_t), intent(in) :: grid
+    integer, intent(in) :: c
+    real(wp), intent(in) :: alpha
+    integer, allocatable :: old_start(:), old_columns(:)
+    logical :: same_structure
+    integer :: g, m
+    if (allocated(self%system(c)%rows%row_start)) then
+      old_start = self%system(c)%rows%row_start
+      old_columns = self%system(c)%rows%columns(1:old_start(size(old_start)) - 1)
+    end if
+    call assemble_rows(self, grid, c, alpha)
+    same_structure = .false.
+    if (allocated(old_start) .and. self%reuse_structure) then
+      associate (rows => self%system(c)%rows)
+        same_structure = size(old_start) == size(rows%row_start)
+        if (same_structure) same_structure = all(old_start == rows%row_start)
+        if (same_structure) same_structure = all(old_columns == rows%columns(1:size(old_columns)))
+      end associate
+    end if
+    ! Every rank must take the same branch (creation and update are collective).
+    same_structure = global_all(same_structure)
+    associate (sys => self%system(c), nodes => self%ibm%geometry%component(c))
+      if (.not. associated(sys%preconditioner)) allocate(sys%preconditioner)
+      if (.not. allocated(sys%rhs)) then
+        call fft_preconditioner_create(sys%preconditioner, self%grid, self%fft, alpha)
+        allocate(sys%rhs(rows_local_count(sys%rows)), sys%solution(rows_local_count(sys%rows)))
+      end if
+      sys%preconditioner%coefficient = alpha
+      sys%preconditioner%replaced_rows = [sys%ghost_rows, sys%interior_rows]
+      sys%preconditioner%replaced_diagonal = [(sys%rows%values(sys%rows%row_start(sys%ghost_rows(g))), &
+                                               g = 1, nodes%n_ghost), (1.0_wp, m = 1, nodes%n_interior)]
+      if (same_structure) then
+        call linear_solver_update_values(sys%solver, sys%rows)
+        self%updates = self%updates + 1
+      else if (self%config%preconditioner == 'user') then
+        call linear_solver_create(sys%solver, sys%rows, self%config, sys%preconditioner)
+      else
+        call linear_solver_create(sys%solver, sys%rows, self%config)
+      end if
+    end associate
+  end subroutine build_system
+
+  !> True on every rank when flag is true on every rank (collective).
+  logical function global_all(flag)
+    logical, intent(in) :: flag
+    global_all = flag
+    call MPI_Allreduce(MPI_IN_PLACE, global_all, 1, MPI_LOGICAL, MPI_LAND, world)
+  end function global_all
+
+  !> New Helmholtz values (a new dt) on the same structure (the body rows do not depend on dt).
+  subroutine helmholtz_values(self, grid, c, alpha)
+    type(immersed_predictor_t), intent(inout) :: self
+    type(fluid_grid_t), intent(in) :: grid
+    integer, intent(in) :: c
+    real(wp), intent(in) :: alpha
+    call assemble_rows(self, grid, c, alpha)
+    self%system(c)%preconditioner%coefficient = alpha
+    call linear_solver_update_values(self%system(c)%solver, self%system(c)%rows)
+  end subroutine helmholtz_values
+
+  !> CSR rows of component c: the Helmholtz row of hypre_helmholtz_rows (7 entries) at fluid
+  !> nodes, the ghost row (G, then the stencil's other corners) and the identity row.
+  subroutine assemble_rows(self, grid, c, alpha)
+    type(immersed_predictor_t), intent(inout) :: self
+    type(fluid_grid_t), intent(in) :: grid
+    integer, intent(in) :: c
+    real(wp), intent(in) :: alpha
+    type(sparse_rows_t) :: helmholtz
+    integer, allocatable :: row_kind(:), in_list(:)
+    integer :: n_local, r, g, m, entry, corner, first
+    integer, parameter :: fluid_row = 0, ghost_row = 1, interior_row = 2
+    real(wp) :: self_weight
+
+    call helmholtz_rows_create(grid, alpha, helmholtz)
+    n_local = rows_local_count(helmholtz)
+    allocate(row_kind(n_local), in_list(n_local))
+    row_kind = fluid_row
+    in_list = 0
+    associate (nodes => self%ibm%geometry%component(c), sys => self%system(c))
+      if (allocated(sys%ghost_rows)) deallocate(sys%ghost_rows, sys%interior_rows, sys%b_ghost, sys%b_interior)
+      allocate(sys%ghost_rows(nodes%n_ghost), sys%interior_rows(nodes%n_interior))
+      allocate(sys%b_ghost(nodes%n_ghost), sys%b_interior(nodes%n_interior))
+      do g = 1, nodes%n_ghost
+        sys%ghost_rows(g) = local_row(grid, nodes%ghost(g)%node)
+        row_kind(sys%ghost_rows(g)) = ghost_row
+        in_list(sys%ghost_rows(g)) = g
+      end do
+      do m = 1, nodes%n_interior
+        sys%interior_rows(m) = local_row(grid, nodes%interior(:, m))
+        row_kind(sys%interior_rows(m)) = interior_row
+        in_list(sys%interior_rows(m)) = m
+      end do
+
+      sys%rows%first_row = helmholtz%first_row
+      sys%rows%last_row = helmholtz%last_row
+      if (allocated(sys%rows%row_start)) deallocate(sys%rows%row_start, sys%rows%columns, sys%rows%values)
+      allocate(sys%rows%row_start(n_local + 1))
+      allocate(sys%rows%columns(size(helmholtz%columns) + 2 * nodes%n_ghost), &
+               sys%rows%values(size(helmholtz%columns) + 2 * nodes%n_ghost))
+      entry = 0
+      do r = 1, n_local
+        sys%rows%row_start(r) = entry + 1
+        select case (row_kind(r))
+        case (fluid_row)
+          first = helmholtz%row_start(r)
+          sys%rows%columns(entry + 1:entry + 7) = helmholtz%columns(first:first + 6)
+          sys%rows%values(entry + 1:entry + 7) = helmholtz%values(first:first + 6)
+          entry = entry + 7
+        case (ghost_row)
+          associate (ghost => nodes%ghost(in_list(r)))
+            self_weight = 0
+            if (ghost%self_corner > 0) self_weight = ghost%weight(ghost%self_corner)
+            entry = entry + 1
+            sys%rows%columns(entry) = helmholtz%columns(helmholtz%row_start(r))   ! the diagonal, G
+            sys%rows%values(entry) = 1.0_wp + ghost%extrapolation * self_weight
+            do corner = 1, 8
+              if (corner == ghost%self_corner) cycle
+              entry = entry + 1
+              sys%rows%columns(entry) = global_row(grid, ghost%stencil(1, corner), ghost%stencil(2, corner), &
+                                                   ghost%stencil(3, corner))
+              sys%rows%values(entry) = ghost%extrapolation * ghost%weight(corner)
+            end do
+          end associate
+        case default
+          entry = entry + 1
+          sys%rows%columns(entry) = helmholtz%columns(helmholtz%row_start(r))
+          sys%rows%values(entry) = 1.0_wp
+        end select
+      end do
+      sys%rows%row_start(n_local + 1) = entry + 1
+    end associate
+  end subroutine assemble_rows
+
+  !> Solve component c: b from field, the body rows' right-hand sides, the Krylov solve from the
+  !> first guess; u* back into field (interior). Stops the run if it does not converge.
+  subroutine solve_component(self, grid, c, field, scale)
+    type(immersed_predictor_t), intent(inout) :: self
+    type(fluid_grid_t), intent(in) :: grid
+    integer, intent(in) :: c
+    real(wp), intent(inout) :: field(0:, 0:, 0:)
+    real(wp), intent(inout) :: scale
+    type(solve_status_t) :: status
+    integer :: g, m
+    character(len=400) :: text
+    associate (sys => self%system(c), nodes => self%ibm%geometry%component(c), arms => self%ibm%arms(c))
+      call field_to_rows(grid, field, sys%rhs)
+      do g = 1, nodes%n_ghost
+        sys%b_ghost(g) = sys%rhs(sys%ghost_rows(g))
+        sys%rhs(sys%ghost_rows(g)) = (1.0_wp + nodes%ghost(g)%extrapolation) * &
+                                     rigid_velocity(self%ibm, nodes%ghost(g)%body, c, arms%surface(:, g))
+        scale = max(scale, abs(sys%rhs(sys%ghost_rows(g))))
+      end do
+      do m = 1, nodes%n_interior
+        sys%b_interior(m) = sys%rhs(sys%interior_rows(m))
+        sys%rhs(sys%interior_rows(m)) = rigid_velocity(self%ibm, nodes%interior_body(m), c, arms%interior(:, m))
+        scale = max(scale, abs(sys%rhs(sys%interior_rows(m))))
+      end do
+      if (self%has_guess) then
+        sys%solution = sys%guess
+      else
+        sys%solution = sys%rhs
+      end if
+      call linear_solver_solve(sys%solver, sys%rhs, sys%solution, status)
+      if (.not. status%converged) then
+        write(text, '(a,i0,a,es10.3,a,es10.3,a)') 'immersed predictor: the Crank-Nicolson system of '// &
+            component_names(c)//' with the immersed-boundary rows did not converge in ', status%iterations, &
+            ' iterations (relative residual ', status%relative_residual, ' > tolerance ', status%tolerance, &
+            '); use a smaller &run dt (or cfl_target), a looser &fluid predictor_tolerance or a larger '// &
+            '&fluid predictor_max_iterations (now '//int_text(status%max_iterations)//')'
+        call fatal(trim(text))
+      end if
+      self%report%sweeps = max(self%report%sweeps, status%iterations)
+      self%report%residual = max(self%report%residual, status%relative_residual)
+      call rows_to_field(grid, sys%solution, field)
+    end associate
+  end subroutine solve_component
+
+  !> The momentum each ghost and interior node of component c adds (module header): its
+  !> Helmholtz-row residual (I - alpha L_h) u* - b, to the load bookkeeping. field's halos current.
+  subroutine account_rows(self, grid, c, alpha, field)
+    type(immersed_predictor_t), intent(inout) :: self
+    type(fluid_grid_t), intent(in) :: grid
+    integer, intent(in) :: c
+    real(wp), intent(in) :: alpha
+    real(wp), intent(in), contiguous :: field(0:, 0:, 0:)
+    real(wp) :: delta
+    integer :: g, m, node(3)
+    call apply_predictor_operator(grid, alpha, field, self%work)
+    associate (sys => self%system(c), nodes => self%ibm%geometry%component(c), arms => self%ibm%arms(c))
+      do g = 1, nodes%n_ghost
+        node = nodes%ghost(g)%node
+        delta = self%work(node(1), node(2), node(3)) - sys%b_ghost(g)
+        call account(self%ibm, grid, nodes%ghost(g)%body, c, arms%ghost(:, g), delta)
+        self%report%largest_change = max(self%report%largest_change, abs(delta))
+      end do
+      do m = 1, nodes%n_interior
+        node = nodes%interior(:, m)
+        delta = self%work(node(1), node(2), node(3)) - sys%b_interior(m)
+        call account(self%ibm, grid, nodes%interior_body(m), c, arms%interior(:, m), delta)
+        self%report%largest_change = max(self%report%largest_change, abs(delta))
+      end do
+    end associate
+  end subroutine account_rows
+
+  !> Local row (1-based, in field_to_rows order) of node (i, j global, k local to the slab).
+  integer function local_row(grid, node)
+    type(fluid_grid_t), intent(in) :: grid
+    integer, intent(in) :: node(3)
+    if (node(3) < 1 .or. node(3) > grid%nz_local) call fatal('immersed predictor: a body node outside the slab', &
+                                                             collective=.false.)
+    local_row = node(1) + grid%nx * ((node(2) - 1) + grid%ny * (node(3) - 1))
+  end function local_row
+end module immersed_predictor
