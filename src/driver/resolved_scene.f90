@@ -30,6 +30,8 @@ module resolved_scene
   use immersed_boundary, only: ibm_settings_t, status_change_summary
   use immersed_geometry, only: fallback_count
   use immersed_predictor, only: default_predictor_config
+  use particle_output, only: particle_output_t, particle_output_flush, particle_output_close
+  use bodies_particle_output, only: bodies_output_open, bodies_output_row
   use immersed_scene, only: immersed_scene_t, immersed_scene_create, immersed_step, motions_from_config, &
                             loads_open, loads_write, loads_close
   implicit none
@@ -47,6 +49,7 @@ contains
     type(flow_output_t) :: flow         ! flow statistics (u_rms, epsilon, Re_lambda, spectrum), if switched on
     type(checkpoint_t) :: restart       ! the checkpoint continued from (open only while restoring)
     type(immersed_scene_t) :: bodies    ! immersed bodies in prescribed motion (particles = 'prescribed')
+    type(particle_output_t) :: bodies_h5   ! their particles.h5
     logical :: with_bodies
     real(wp) :: dt, rate, viscous_limit, next_field_time, start_wall, step_wall
     integer(i8) :: first_step
@@ -131,6 +134,7 @@ contains
     call flow_output_finish(flow)
     if (with_bodies) then
       call loads_close(bodies)
+      call particle_output_close(bodies_h5)
       call log_line('immersed boundary: image-point fallbacks (image segment inside another body, moved back to '// &
           'the mid-gap) in '//int_text(fallback_steps)//' of '//int_text(solver%step - first_step)//' steps, '// &
           int_text(fallback_rows)//' ghost rows in all, at most '//int_text(fallback_most)//' in one step')
@@ -153,6 +157,8 @@ contains
                                  predictor_config=default_predictor_config(cfg%fluid%predictor_tolerance, &
                                  cfg%fluid%predictor_max_iterations))
       call loads_open(bodies, run_file('bodies_loads.dat'), append=cfg%run%restart, last_step=solver%step)
+      call bodies_output_open(bodies_h5, run_file('particles.h5'), cfg%bodies, cfg%run%name, int(cfg%run%seed, i8), &
+                              cfg%run%restart, solver%step)
       call log_line('immersed boundary: '//trim(cfg%scene%ibm_coupling)//' coupling, '// &
           int_text(cfg%bodies%count)//' bodies, loads every step in '//run_file('bodies_loads.dat'))
     end subroutine start_bodies
@@ -170,6 +176,7 @@ contains
         call immersed_step(bodies, solver, dt)
       end if
       call loads_write(bodies, solver%step, solver%time)
+      call bodies_output_row(bodies_h5, bodies, solver%time, [solver%grid%lx, solver%grid%ly, solver%grid%lz])
       call count_fallbacks()
     end subroutine bodies_step
 
@@ -198,6 +205,7 @@ contains
       type(fluid_solver_t), intent(inout) :: solver
       type(checkpoint_t) :: transaction
       call timer_tic(timer_io)
+      if (with_bodies) call particle_output_flush(bodies_h5)
       call checkpoint_begin(transaction, solver%step)
       call write_fluid_checkpoint(transaction, solver)
       call forcing_driver_write_checkpoint(forcing, transaction)

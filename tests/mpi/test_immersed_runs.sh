@@ -5,7 +5,10 @@
 #    the rank boundary and the periodic wrap): every load in bodies_loads.dat equal to 1e-10 of the
 #    largest load (round-off; the Jacobi ghost sweeps do not depend on the ranks), for both couplings;
 #  - the file has one row per body per step and the log names the sweeps and the residual;
-#  - a restart continues bodies_loads.dat bit for bit (rows after the checkpoint dropped);
+#  - particles.h5 holds one row per step per body, its forces equal bodies_loads.dat's and its
+#    positions the prescribed motion c0 + U t (wrapped);
+#  - a restart continues bodies_loads.dat and particles.h5 bit for bit (rows after the checkpoint
+#    dropped);
 #  - a sphere crossing the periodic wrap in x and z (its centre wraps during the run) and, on 2
 #    ranks, the rank boundaries (ibm notes rung 9): its loads equal to round-off those of the same
 #    sphere 16 cells lower, which crosses no periodic boundary (the periodic grid is invariant under
@@ -129,17 +132,55 @@ refused refuses_unknown_load_method faces.nml 'load_method'
 deck thin implicit explicit momentum disk 16 > thin.nml
 refused refuses_thin_disk_with_grid thin.nml 'nx = ny = nz >='
 
+# particles.h5 of the 1-rank implicit run: 12 rows; the hydrodynamic force of each body equals the
+# force columns of bodies_loads.dat (written with 17 digits: round trip to 1e-15), and body 1's
+# centre is c0 + U t wrapped into the box at every row (the motion is prescribed: to 1e-12 m).
+dump() { h5dump -y -w 0 -m '%.17g' -d "$2" "$1" 2>/dev/null | sed -n '/DATA {/,/}/p' | tr -d 'DATA{}(),:' ; }
+if dump one_implicit/particles.h5 /particle1/force_hydrodynamic > f1.txt && \
+   dump one_implicit/particles.h5 /particle2/force_hydrodynamic > f2.txt && \
+   dump one_implicit/particles.h5 /particle1/position > x1.txt && dump one_implicit/particles.h5 /time > t.txt && \
+   python3 - one_implicit/bodies_loads.dat > cmp.txt 2>&1 <<'PY'
+import sys
+numbers = lambda name: [float(x) for x in open(name).read().split()]
+rows = [l.split() for l in open(sys.argv[1]) if not l.startswith('#')]
+t, x1 = numbers('t.txt'), numbers('x1.txt')
+assert len(t) == 12 and len(x1) == 36, f'{len(t)} times, {len(x1) // 3} positions (12 steps)'
+worst = 0.0
+for body, name in ((1, 'f1.txt'), (2, 'f2.txt')):
+    h5 = numbers(name)
+    text = [float(x) for r in rows if int(r[2]) == body for x in r[3:6]]
+    assert len(h5) == len(text) == 36, f'body {body}: {len(h5)} vs {len(text)} values'
+    scale = max(abs(v) for v in text)
+    worst = max(worst, max(abs(a - b) for a, b in zip(h5, text)) / scale)
+assert worst <= 1e-15, f'force differs by {worst:.2e} relative'
+c0, U = (0.3e-3, 0.4e-3, 0.5e-3), (2.0e-3, 0.0, 1.0e-3)
+moved = max(abs(x1[3 * i + d] - (c0[d] + U[d] * t[i]) % 1.0e-3) for i in range(12) for d in range(3))
+assert moved <= 1e-12, f'body 1 position off the prescribed motion by {moved:.2e} m'
+print(f'12 rows, force vs bodies_loads.dat {worst:.1e} relative, position {moved:.1e} m')
+PY
+then
+  echo "PASS immersed_runs/particles_h5_rows_loads_and_motion  ($(cat cmp.txt))"
+else
+  echo "FAIL immersed_runs/particles_h5_rows_loads_and_motion: $(head -c 400 cmp.txt)"
+fi
+
 # Restart (docs/outputs.md bodies_loads.dat): the moving bodies' run checkpointed at step 6, its
 # last checkpoint (step 12) deleted as if killed there, restarted: the rows after step 6 are dropped
 # and written again, and the file equals the uninterrupted run's to the bit (the body motion is a
 # function of time; the fluid, with the values left at uncovered nodes, is in the checkpoint).
 deck restart implicit explicit momentum needle 32 | sed 's/checkpoint_interval = 0/checkpoint_interval = 6/' > restart.nml
-if run 1 restart.nml && cp restart/bodies_loads.dat uninterrupted.dat && rm restart/checkpoints/checkpoint_0000000012.h5 \
+if run 1 restart.nml && cp restart/bodies_loads.dat uninterrupted.dat && cp restart/particles.h5 uninterrupted.h5 \
+   && rm restart/checkpoints/checkpoint_0000000012.h5 \
    && mpirun -np 1 "$AGGLO" restart.nml --set run.restart=.true. > restart.out 2>&1; then
   if cmp -s uninterrupted.dat restart/bodies_loads.dat; then
     echo "PASS immersed_runs/restart_continues_loads_bit_for_bit  ($(grep -vc '^#' restart/bodies_loads.dat) rows)"
   else
     echo "FAIL immersed_runs/restart_continues_loads_bit_for_bit: $(diff uninterrupted.dat restart/bodies_loads.dat | head -c 300)"
+  fi
+  if h5diff uninterrupted.h5 restart/particles.h5 > h5diff.txt 2>&1; then
+    echo "PASS immersed_runs/restart_continues_particles_h5_bit_for_bit  (h5diff, no tolerance)"
+  else
+    echo "FAIL immersed_runs/restart_continues_particles_h5_bit_for_bit: $(head -c 300 h5diff.txt)"
   fi
 else
   echo "FAIL immersed_runs/restart_continues_loads_bit_for_bit: a run failed: $(tail -n 3 restart.out restart.nml.out 2>/dev/null | head -c 400)"
