@@ -39,17 +39,19 @@ module config_bodies
     character(len=16) :: load_method = 'momentum'             !< 'momentum' | 'surface' (the face sum)
     character(len=16) :: geometry = 'analytic'                !< 'analytic' | 'mesh' (ghost nodes' surface)
     integer :: mesh_level = 2                                 !< icosphere subdivisions: 20 4^level faces (2: 320)
+    logical :: compare_loads = .false.                        !< also the face sum with load_method = 'momentum'
     real(wp) :: driving_force(3) = 0                          !< N/m^3, uniform body force (mean pressure gradient)
   end type bodies_config_t
 
   integer :: count, max_sweeps, mesh_level
+  logical :: compare_loads
   character(len=16) :: shape(max_bodies), load_method, geometry
   real(wp) :: radius(max_bodies), aspect_ratio(max_bodies), centre(3, max_bodies), axis(3, max_bodies), &
               velocity(3, max_bodies), angular_velocity(3, max_bodies), oscillation_amplitude(3, max_bodies), &
               oscillation_frequency(max_bodies), ghost_tolerance, driving_force(3)
   namelist /bodies/ count, shape, radius, aspect_ratio, centre, axis, velocity, angular_velocity, &
                     oscillation_amplitude, oscillation_frequency, ghost_tolerance, max_sweeps, load_method, &
-                    driving_force, geometry, mesh_level
+                    driving_force, geometry, mesh_level, compare_loads
 
 contains
 
@@ -60,6 +62,7 @@ contains
     oscillation_amplitude = cfg%oscillation_amplitude; oscillation_frequency = cfg%oscillation_frequency
     ghost_tolerance = cfg%ghost_tolerance; max_sweeps = cfg%max_sweeps; load_method = cfg%load_method
     driving_force = cfg%driving_force; geometry = cfg%geometry; mesh_level = cfg%mesh_level
+    compare_loads = cfg%compare_loads
   end subroutine to_namelist
 
   subroutine from_namelist(cfg)
@@ -69,6 +72,7 @@ contains
     cfg%oscillation_amplitude = oscillation_amplitude; cfg%oscillation_frequency = oscillation_frequency
     cfg%ghost_tolerance = ghost_tolerance; cfg%max_sweeps = max_sweeps; cfg%load_method = load_method
     cfg%driving_force = driving_force; cfg%geometry = geometry; cfg%mesh_level = mesh_level
+    cfg%compare_loads = compare_loads
   end subroutine from_namelist
 
   subroutine read_bodies_group(deck, cfg)

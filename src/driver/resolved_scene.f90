@@ -153,7 +153,9 @@ contains
       settings%max_sweeps = cfg%bodies%max_sweeps
       settings%fluid_density = cfg%fluid%density
       call immersed_scene_create(bodies, solver, motions_from_config(cfg%bodies, solver%grid), settings, &
-                                 cfg%bodies%driving_force, cfg%bodies%load_method, cfg%bodies%mesh_level, &
+                                 cfg%bodies%driving_force, cfg%bodies%load_method, &
+                                 merge(cfg%bodies%mesh_level, -1, cfg%bodies%load_method == 'surface' .or. &
+                                       cfg%bodies%compare_loads), &
                                  predictor_config=default_predictor_config(cfg%fluid%predictor_tolerance, &
                                  cfg%fluid%predictor_max_iterations))
       call loads_open(bodies, run_file('bodies_loads.dat'), append=cfg%run%restart, last_step=solver%step)

@@ -6,6 +6,8 @@
 #    torque are the face-sum columns, the momentum columns are filled, and every load equals the
 #    other rank count's to 1e-10 of the largest (each probe is evaluated by one rank, the Jacobi
 #    sweeps do not depend on the ranks); the log compares both methods;
+#  - with load_method = 'momentum' the face sum is not computed (its columns zero, no comparison in
+#    the log) unless compare_loads = .true., which fills them with the values of the 'surface' run;
 #  - refused decks naming the variable: an unknown geometry, mesh_level 5.
 # Prints PASS/FAIL lines; works in a temporary directory.
 set -u
@@ -61,6 +63,36 @@ PY
   fi
 else
   echo "FAIL immersed_surface_runs/surface_loads_written_and_one_two_ranks_equal: a run failed: $(tail -n 3 one.nml.out two.nml.out | head -c 400)"
+fi
+
+# The face sum only when asked for: 'momentum' alone leaves its columns zero; compare_loads fills
+# them, and they equal the 1-rank 'surface' run's face sum to round-off (the same computation).
+deck moment mesh 1 | sed "s/load_method = 'surface'/load_method = 'momentum'/" > moment.nml
+deck compare mesh 1 | sed "s/load_method = 'surface'/load_method = 'momentum', compare_loads = .true./" > compare.nml
+if run 1 moment.nml && run 1 compare.nml; then
+  if python3 - moment/bodies_loads.dat compare/bodies_loads.dat one/bodies_loads.dat > cmp.txt 2>&1 <<'PY'
+import sys
+rows = lambda name: [l.split() for l in open(name) if not l.startswith('#')]
+moment, compare, surface = rows(sys.argv[1]), rows(sys.argv[2]), rows(sys.argv[3])
+assert all(float(x) == 0.0 for r in moment for x in r[19:25]), 'face-sum columns filled without compare_loads'
+assert all(r[3:9] == r[13:19] for r in compare), 'written loads are not the momentum ones'
+scale = max(abs(float(x)) for r in surface for x in r[19:25])
+worst = max(abs(float(x) - float(y)) for r, s in zip(compare, surface) for x, y in zip(r[19:25], s[19:25]))
+assert scale > 0 and worst <= 1e-12 * scale, f'face sum differs from the surface run by {worst:.2e} of {scale:.2e}'
+print(f'momentum only: face sum zero; compare_loads: face sum = surface run to {worst:.1e}')
+PY
+  then
+    echo "PASS immersed_surface_runs/face_sum_only_when_asked  ($(cat cmp.txt))"
+  else
+    echo "FAIL immersed_surface_runs/face_sum_only_when_asked: $(head -c 400 cmp.txt)"
+  fi
+  if grep -q 'last step |F| momentum' moment.nml.out; then
+    echo "FAIL immersed_surface_runs/no_comparison_without_face_sum: the log compares a face sum not computed"
+  else
+    echo "PASS immersed_surface_runs/no_comparison_without_face_sum"
+  fi
+else
+  echo "FAIL immersed_surface_runs/face_sum_only_when_asked: a run failed: $(tail -n 3 moment.nml.out compare.nml.out | head -c 400)"
 fi
 
 refused() { # test name, deck file, expected text in the message
