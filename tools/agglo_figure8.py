@@ -297,7 +297,7 @@ def plane_view(run, step=None, time=None, second="relative_velocity", width=None
             "outlines": outlines, "width": width}
 
 
-def draw(view, output, title=None):
+def draw(view, output, title=None, dpi=150):
     """Write the PNG of a plane_view."""
     import matplotlib
     matplotlib.use("Agg")
@@ -319,7 +319,7 @@ def draw(view, output, title=None):
     snapshot, pair = view["snapshot"], view["pair"]
     axes.set_title(title or f"{pair['shape']} pair, t = {snapshot['time']:.4g} s (step {snapshot['step']})",
                    fontsize=10)
-    figure.savefig(output, dpi=150)
+    figure.savefig(output, dpi=dpi)
     plt.close(figure)
 
 
@@ -339,17 +339,18 @@ def main(argv=None):
     parser.add_argument("--resolution", type=int, default=240, help="samples along each side (240)")
     parser.add_argument("--vectors", type=int, default=21, help="arrows along each side (21)")
     parser.add_argument("--mask-bodies", action="store_true", help="leave the bodies' interiors blank")
+    parser.add_argument("--dpi", type=int, default=150, help="PNG resolution (150 dots per inch, 6.4 x 5.4 in)")
     parser.add_argument("-o", "--output", help="PNG to write (default RUN/figure8_<step>.png)")
     args = parser.parse_args(argv)
-    if args.resolution < 2 or args.vectors < 2:
-        parser.error("--resolution and --vectors must be at least 2")
+    if args.resolution < 2 or args.vectors < 2 or args.dpi < 10:
+        parser.error("--resolution and --vectors must be at least 2, --dpi at least 10")
     if args.width is not None and not args.width > 0.0:
         parser.error("--width must be positive")
     try:
         view = plane_view(args.run, args.step, args.time, args.second_direction, args.width,
                           args.resolution, args.vectors, args.mask_bodies)
         output = args.output or os.path.join(args.run, f"figure8_{view['snapshot']['step']:010d}.png")
-        draw(view, output)
+        draw(view, output, dpi=args.dpi)
     except FigureError as error:
         print(f"agglo-figure8: {error}", file=sys.stderr)
         return 1
