@@ -61,7 +61,8 @@ if run 1 cut.nml; then
        && grep -q 'fields_0000000010.h5 .*removed' cut/agglo.log; then
       echo "PASS restart_abandoned_snapshot_removed_and_forgotten"
     else
-      echo "FAIL restart_abandoned_snapshot_removed_and_forgotten: fields_0000000010.h5 still in the directory, manifest or not logged"
+      echo "FAIL restart_abandoned_snapshot_removed_and_forgotten: fields_0000000010.h5 in the directory," \
+           "the manifest, or not logged"
     fi
   else
     echo "FAIL restart_series_steps: the interrupted run left no snapshot of step 10 or the restart failed"
@@ -70,12 +71,13 @@ fi
 
 # --- the pair in the resolved fluid --------------------------------------------------------------
 cat > pair.nml <<NML
-&run name = 'pair', seed = 1, end_time = 2.0e-4, dt = 2.0e-5, dt_mode = 'fixed', progress_interval = 100 /
+&run name = 'pair', seed = 1, end_time = 2.0e-4, dt = 2.0e-5, dt_mode = 'fixed',
+     progress_interval = 100 /
 &scene fluid = 'resolved', particles = 'pair', particle_coupling = 'point', particle_substeps = 10 /
 &grid nx = 8, ny = 8, nz = 8, length_x = 1.0e-3, length_y = 1.0e-3, length_z = 1.0e-3 /
 &fluid density = 997.0, viscosity = 1.0e-6, init = 'rest' /
-&pair shape = 'disk', aspect_ratio = 5.0, radius = 50.0e-6, density = 2710.0, orientation = 'random', gap = 5.0e-6,
-      relative_speed = 0.875e-3, centre = 'given', centre_position = 0.99e-3, 0.5e-3, 0.5e-3 /
+&pair shape = 'disk', aspect_ratio = 5.0, radius = 50.0e-6, density = 2710.0, orientation = 'random',
+      gap = 5.0e-6, relative_speed = 0.875e-3, centre = 'given', centre_position = 0.99e-3, 0.5e-3, 0.5e-3 /
 &output stats_interval = 10, field_interval = 1.0e-4 /
 NML
 if run 1 pair.nml; then
