@@ -17,7 +17,8 @@ all three directions, so no half-cell shift is made.
 The pair's pose: the snapshot's own record of each body (/surfaces/body_<n>/centre, orientation,
 semi_axes: written with the snapshot, exact at its time) when present, else the row of
 particles.h5 nearest the snapshot's time; the relative velocity always from particles.h5 (nearest
-row). Run it through the launcher tools/agglo-figure8 (it picks the repository's .venv).
+row). Runs of prescribed bodies (no particles.h5) are drawn from the snapshot's poses through the
+bodies given by --bodies, with a lab axis or a given second direction. Run it through the launcher tools/agglo-figure8 (it picks the repository's .venv).
 """
 import argparse
 import os
@@ -84,7 +85,7 @@ class Plane:
             axis = min(LAB_AXES, key=lambda name: abs(np.dot(LAB_AXES[name], self.e1)))
             second = np.array(LAB_AXES[axis])
             normal_part = second - np.dot(second, self.e1) * self.e1
-            self.second_note = f"second direction along the centre line: lab {axis} used"
+            self.second_note = f"second direction along the centre line or unknown: lab {axis} used"
         self.e2 = normal_part / np.linalg.norm(normal_part)
 
     def points(self, s, t):
@@ -218,11 +219,11 @@ def read_snapshot(path):
 
 def read_pair(run, time):
     """The pair at the row of particles.h5 nearest time: centres, orientations, velocities,
-    semi-axes, shape, and the row's time."""
+    semi-axes, shape, and the row's time; None without particles.h5 (prescribed bodies)."""
     import h5py
     path = os.path.join(run, "particles.h5")
     if not os.path.exists(path):
-        raise FigureError(f"{run} has no particles.h5: the figure needs a pair in the resolved fluid")
+        return None
     with h5py.File(path, "r") as handle:
         times = np.array(handle["time"][()])
         if times.size == 0:
@@ -242,8 +243,11 @@ def read_pair(run, time):
 
 
 def second_direction_of(choice, pair):
-    """The plane's second direction: 'relative_velocity', a lab axis x|y|z, or 'a,b,c'."""
+    """The plane's second direction: 'relative_velocity', a lab axis x|y|z, or 'a,b,c'. Without a
+    pair in particles.h5 the relative velocity is unknown: zero (the plane then takes a lab axis)."""
     if choice == "relative_velocity":
+        if pair is None:
+            return np.zeros(3)
         return pair["bodies"][1]["velocity"] - pair["bodies"][0]["velocity"]
     if choice in LAB_AXES:
         return np.array(LAB_AXES[choice])
@@ -262,13 +266,30 @@ def second_direction_of(choice, pair):
 # ---------------------------------------------------------------------------------------------
 
 def plane_view(run, step=None, time=None, second="relative_velocity", width=None, resolution=240,
-               vectors=21, mask_bodies=False):
+               vectors=21, mask_bodies=False, chosen=(1, 2)):
     """Everything the figure shows, as arrays (the tests check them): the chosen snapshot, the
-    plane, s and t axes (m), |u| and the in-plane components on the grid, the outlines."""
+    plane, s and t axes (m), |u| and the in-plane components on the grid, the outlines.
+    chosen: the two bodies (1-based) the plane goes through."""
     snapshot = read_snapshot(choose_snapshot(run, step, time))
     pair = read_pair(run, snapshot["time"])
-    bodies = snapshot["bodies"][:2] if len(snapshot["bodies"]) >= 2 else pair["bodies"]
-    pose_source = "snapshot" if bodies is not pair["bodies"] else "particles.h5"
+    if len(set(chosen)) != 2 or min(chosen) < 1:
+        raise FigureError(f"--bodies {chosen[0]},{chosen[1]}: two different body numbers from 1")
+    if snapshot["bodies"]:
+        if max(chosen) > len(snapshot["bodies"]):
+            raise FigureError(f"--bodies {chosen[0]},{chosen[1]}: {os.path.basename(snapshot['path'])} "
+                              f"has {len(snapshot['bodies'])} bodies")
+        bodies = [snapshot["bodies"][n - 1] for n in chosen]
+        pose_source = "snapshot"
+    elif pair is None:
+        raise FigureError(f"{run} has no particles.h5 and {os.path.basename(snapshot['path'])} no bodies' "
+                          "poses (/surfaces): no particles to draw the plane through")
+    elif max(chosen) > 2:
+        raise FigureError(f"--bodies {chosen[0]},{chosen[1]}: particles.h5 holds a pair (bodies 1 and 2)")
+    else:
+        bodies = [pair["bodies"][n - 1] for n in chosen]
+        pose_source = "particles.h5"
+    if pair is not None and tuple(chosen) == (2, 1):
+        pair = dict(pair, bodies=pair["bodies"][::-1])   # the relative velocity of the chosen order
     box = snapshot["lengths"]
     plane = Plane(bodies[0]["centre"], bodies[1]["centre"], second_direction_of(second, pair), box)
     extent = max(max(body["semi_axes"]) for body in bodies)
@@ -294,7 +315,7 @@ def plane_view(run, step=None, time=None, second="relative_velocity", width=None
     return {"snapshot": snapshot, "pair": pair, "plane": plane, "pose_source": pose_source,
             "s": s, "t": s, "magnitude": magnitude,
             "arrow_s": sa, "arrow_t": ta, "arrow_u": arrows @ plane.e1, "arrow_v": arrows @ plane.e2,
-            "outlines": outlines, "width": width}
+            "outlines": outlines, "width": width, "chosen": tuple(chosen)}
 
 
 def draw(view, output, title=None, dpi=150):
@@ -317,8 +338,8 @@ def draw(view, output, title=None, dpi=150):
     axes.set_xlabel("s along the centre line (um)")
     axes.set_ylabel("t in the plane (um)")
     snapshot, pair = view["snapshot"], view["pair"]
-    axes.set_title(title or f"{pair['shape']} pair, t = {snapshot['time']:.4g} s (step {snapshot['step']})",
-                   fontsize=10)
+    what = f"{pair['shape']} pair" if pair is not None else "bodies {} and {}".format(*view["chosen"])
+    axes.set_title(title or f"{what}, t = {snapshot['time']:.4g} s (step {snapshot['step']})", fontsize=10)
     figure.savefig(output, dpi=dpi)
     plt.close(figure)
 
@@ -338,6 +359,8 @@ def main(argv=None):
                         "and about one body length around it")
     parser.add_argument("--resolution", type=int, default=240, help="samples along each side (240)")
     parser.add_argument("--vectors", type=int, default=21, help="arrows along each side (21)")
+    parser.add_argument("--bodies", default="1,2",
+                        help="the two bodies the plane goes through, i,j (default 1,2; prescribed bodies)")
     parser.add_argument("--mask-bodies", action="store_true", help="leave the bodies' interiors blank")
     parser.add_argument("--dpi", type=int, default=150, help="PNG resolution (150 dots per inch, 6.4 x 5.4 in)")
     parser.add_argument("-o", "--output", help="PNG to write (default RUN/figure8_<step>.png)")
@@ -346,17 +369,21 @@ def main(argv=None):
         parser.error("--resolution and --vectors must be at least 2, --dpi at least 10")
     if args.width is not None and not args.width > 0.0:
         parser.error("--width must be positive")
+    if not re.fullmatch(r"[0-9]+,[0-9]+", args.bodies):
+        parser.error("--bodies takes two body numbers i,j")
+    chosen = tuple(int(n) for n in args.bodies.split(","))
     try:
         view = plane_view(args.run, args.step, args.time, args.second_direction, args.width,
-                          args.resolution, args.vectors, args.mask_bodies)
+                          args.resolution, args.vectors, args.mask_bodies, chosen)
         output = args.output or os.path.join(args.run, f"figure8_{view['snapshot']['step']:010d}.png")
         draw(view, output, dpi=args.dpi)
     except FigureError as error:
         print(f"agglo-figure8: {error}", file=sys.stderr)
         return 1
     snapshot, pair, plane = view["snapshot"], view["pair"], view["plane"]
-    print(f"snapshot {os.path.basename(snapshot['path'])} (t = {snapshot['time']:.6g} s); pair from "
-          f"{view['pose_source']}, particles.h5 row at t = {pair['time']:.6g} s")
+    row = f", particles.h5 row at t = {pair['time']:.6g} s" if pair is not None else ", no particles.h5"
+    print(f"snapshot {os.path.basename(snapshot['path'])} (t = {snapshot['time']:.6g} s); bodies "
+          f"{chosen[0]} and {chosen[1]} from {view['pose_source']}{row}")
     if plane.second_note:
         print(plane.second_note)
     print(f"centre distance {plane.distance:.4g} m; |u| on the plane {np.min(view['magnitude']):.4g} .. "

@@ -171,6 +171,23 @@ def test_poses_from_the_snapshot_bodies(run):
     assert view["pair"]["time"] == pytest.approx(2.0e-4)      # the nearest particles.h5 row
 
 
+def test_prescribed_bodies_without_particles_h5(tmp_path):
+    run = tmp_path / "prescribed"
+    run.mkdir()
+    three = [{"centre": c, "orientation": q, "semi_axes": (80e-6, 40e-6)}
+             for c, q in zip([CENTRES[0], np.array([0.7e-3, 0.5e-3, 0.9e-3]), CENTRES[1]], QUATERNIONS * 2)]
+    write_snapshot(run, 12, 5.0e-5, linear_field(), bodies=three)
+    view = fig.plane_view(str(run), resolution=5, chosen=(1, 3))
+    assert view["pair"] is None and view["pose_source"] == "snapshot"
+    assert np.allclose(view["plane"].centre2, CENTRES[1], rtol=0, atol=1e-18)
+    assert "lab" in view["plane"].second_note                  # no relative velocity: a lab axis
+    out = subprocess.run([str(TOOL), str(run), "--bodies", "1,3", "-o", str(run / "b.png")],
+                         capture_output=True, text=True)
+    assert out.returncode == 0 and (run / "b.png").read_bytes()[:4] == b"\x89PNG", out.stderr
+    wrong = subprocess.run([str(TOOL), str(run), "--bodies", "1,4"], capture_output=True, text=True)
+    assert wrong.returncode == 1 and "has 3 bodies" in wrong.stderr
+
+
 def test_command_writes_the_png(run, tmp_path):
     latest = subprocess.run([str(TOOL), str(run)], capture_output=True, text=True)
     assert latest.returncode == 0, latest.stderr
@@ -188,7 +205,7 @@ def test_command_writes_the_png(run, tmp_path):
 def test_refusals(run, tmp_path):
     (run / "particles.h5").unlink()
     missing = subprocess.run([str(TOOL), str(run)], capture_output=True, text=True)
-    assert missing.returncode == 1 and "no particles.h5" in missing.stderr
+    assert missing.returncode == 1 and "no particles.h5 and" in missing.stderr
     empty = tmp_path / "empty"
     empty.mkdir()
     none = subprocess.run([str(TOOL), str(empty)], capture_output=True, text=True)
