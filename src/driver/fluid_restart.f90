@@ -16,6 +16,7 @@ module fluid_restart
   use checkpoint_files, only: checkpoint_t
   use field_output, only: field_snapshot_t, field_snapshot_begin, field_snapshot_add, field_snapshot_end, &
                           at_cell_centre, at_x_face, at_y_face, at_z_face
+  use body_surface_output, only: body_pose_t, field_snapshot_add_bodies
   use fluid_solver, only: fluid_solver_t, fluid_exchange_velocity
   implicit none
   private
@@ -165,9 +166,11 @@ contains
     field(1:solver%grid%nx, 1:solver%grid%ny, 1:solver%grid%nz_local) = interior
   end subroutine read_interior
 
-  !> fields_<step>.h5 with u, v, w (on their faces) and pressure (cell centres), and fields.xdmf.
-  subroutine write_fluid_snapshot(solver)
+  !> fields_<step>.h5 with u, v, w (on their faces) and pressure (cell centres), and fields.xdmf;
+  !> with bodies, their surfaces at those poses too (body_surface_output).
+  subroutine write_fluid_snapshot(solver, bodies)
     type(fluid_solver_t), intent(in) :: solver
+    type(body_pose_t), intent(in), optional :: bodies(:)
     type(field_snapshot_t) :: snapshot
     call field_snapshot_begin(snapshot, solver%step, solver%time, [solver%grid%nx, solver%grid%ny, solver%grid%nz], &
                               [solver%grid%lx, solver%grid%ly, solver%grid%lz])
@@ -175,6 +178,8 @@ contains
     call add('v', solver%v, at_y_face)
     call add('w', solver%w, at_z_face)
     call add('pressure', solver%pressure, at_cell_centre)
+    if (present(bodies)) &
+      call field_snapshot_add_bodies(snapshot, bodies, [solver%grid%lx, solver%grid%ly, solver%grid%lz])
     call field_snapshot_end(snapshot)
 
   contains

@@ -35,6 +35,7 @@ module resolved_pair_scene
   use fluid_diagnostics, only: fluid_statistics_t, compute_fluid_statistics, advective_rate
   use time_step_control, only: next_time_step, explicit_viscous_limit
   use fluid_restart, only: write_fluid_checkpoint, write_fluid_snapshot
+  use body_surface_output, only: system_body_poses
   use fluid_monitor, only: statistics_open, statistics_write, statistics_close, progress_line, timing_report
   use forcing_driver, only: forcing_driver_t, forcing_driver_start, forcing_driver_power_input, &
                             forcing_driver_write_checkpoint, forcing_driver_finish
@@ -207,7 +208,7 @@ contains
 
     subroutine output_fields()
       call timer_tic(timer_io)
-      call write_fluid_snapshot(solver)
+      call write_fluid_snapshot(solver, system_body_poses(system))
       call timer_toc(timer_io)
     end subroutine output_fields
 

@@ -28,12 +28,13 @@ module resolved_scene
                                     flow_output_finish
   use parallel_env, only: global_sum
   use immersed_boundary, only: ibm_settings_t, status_change_summary
-  use immersed_geometry, only: fallback_count
+  use immersed_geometry, only: fallback_count, immersed_body_t
   use immersed_predictor, only: default_predictor_config
   use particle_output, only: particle_output_t, particle_output_flush, particle_output_close
   use bodies_particle_output, only: bodies_output_open, bodies_output_row
   use immersed_scene, only: immersed_scene_t, immersed_scene_create, immersed_step, motions_from_config, &
-                            loads_open, loads_write, loads_close
+                            loads_open, loads_write, loads_close, motion_body
+  use body_surface_output, only: body_pose_t
   implicit none
   private
   public :: run_resolved_scene
@@ -195,10 +196,23 @@ contains
       fallback_most = max(fallback_most, fallbacks)
     end subroutine count_fallbacks
 
+    !> The snapshot, with the bodies' surfaces at their poses of this time when there are bodies.
     subroutine output_fields(solver)
       type(fluid_solver_t), intent(inout) :: solver
+      type(body_pose_t), allocatable :: poses(:)
+      type(immersed_body_t) :: placed
+      integer :: n
       call timer_tic(timer_io)
-      call write_fluid_snapshot(solver)
+      if (with_bodies) then
+        allocate(poses(size(bodies%motion)))
+        do n = 1, size(poses)
+          placed = motion_body(bodies%motion(n), solver%time, [solver%grid%lx, solver%grid%ly, solver%grid%lz])
+          poses(n) = body_pose_t(placed%shape, placed%centre, placed%orientation)
+        end do
+        call write_fluid_snapshot(solver, poses)
+      else
+        call write_fluid_snapshot(solver)
+      end if
       call timer_toc(timer_io)
     end subroutine output_fields
 

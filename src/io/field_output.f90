@@ -24,6 +24,13 @@
 !> half-cell shifts that a single cell-centred grid would impose on u, v, w. To combine the velocity
 !> components in ParaView, resample them onto one grid (e.g. "Resample With Dataset").
 !> XDMF lists Dimensions and the ORIGIN_DXDYDZ origin and spacing slowest index first: (z, y, x).
+!>
+!> Triangulated surfaces (the bodies' meshes, body_surface_output) may go into the same snapshot:
+!>   /surfaces/<name>/vertices (3, n_vertices) real(wp), m, lab frame
+!>   /surfaces/<name>/faces    (3, n_faces) integer, ZERO-based vertex indices (XDMF's convention)
+!>   /surface_names            string, blank-separated
+!> and each one becomes a Triangle grid of that time's spatial collection in fields.xdmf, so the
+!> surfaces share the snapshots' times, files and fate on restart (discard_snapshots_after).
 module field_output
   use agglo_kinds, only: wp, i8
   use error_handling, only: fatal
@@ -34,11 +41,12 @@ module field_output
   use logger, only: log_line
   use directory_listing, only: list_directory, name_length
   use hdf5_io, only: h5_file_t, h5_create, h5_open, h5_close, h5_write_slab, h5_write_array, h5_read_array, &
-                     h5_write_string, h5_read_string
+                     h5_write_string, h5_read_string, h5_exists, h5_dataset_shape
   implicit none
   private
   public :: field_snapshot_t, field_snapshot_begin, field_snapshot_add, field_snapshot_end, write_field_snapshot, &
-            field_snapshot_name, discard_snapshots_after, at_cell_centre, at_x_face, at_y_face, at_z_face
+            field_snapshot_name, discard_snapshots_after, at_cell_centre, at_x_face, at_y_face, at_z_face, &
+            field_snapshot_add_surface
 
   character(len=*), parameter :: at_cell_centre = 'centre'   !< pressure and other cell-centred fields
   character(len=*), parameter :: at_x_face = 'x_face'        !< u
@@ -55,6 +63,7 @@ module field_output
     integer :: global_shape(3) = 0
     real(wp) :: lengths(3) = 0.0_wp
     character(len=:), allocatable :: names, locations   !< blank-separated, in the order added
+    character(len=:), allocatable :: surfaces           !< blank-separated names of the triangulated surfaces
     character(len=:), allocatable :: directory
   end type field_snapshot_t
 
@@ -66,6 +75,8 @@ module field_output
     integer :: global_shape(3) = 0
     real(wp) :: lengths(3) = 0.0_wp
     character(len=:), allocatable :: names, locations
+    character(len=:), allocatable :: surfaces             !< blank-separated ('' without surfaces)
+    integer, allocatable :: surface_vertices(:), surface_faces(:)   !< counts, one per surface
   end type snapshot_record_t
 
   !> Start a snapshot (collective): step (integer or integer(i8)), time in s, global shape (nx, ny, nz),
@@ -108,6 +119,7 @@ contains
     snapshot%lengths = lengths
     snapshot%names = ''
     snapshot%locations = ''
+    snapshot%surfaces = ''
     if (present(directory)) then
       call h5_create(snapshot%file, snapshot%directory//'/'//field_snapshot_name(step), complete_on_close=.true.)
     else   ! a file of the run: recorded in its manifest
@@ -145,6 +157,29 @@ contains
     snapshot%locations = trim(adjustl(snapshot%locations//' '//trim(location)))
   end subroutine field_snapshot_add
 
+  !> Add a triangulated surface (collective; every rank passes the same mesh, rank 0's is written):
+  !> vertices(3, n_vertices) in m (lab frame), faces(3, n_faces) 1-based vertex indices (stored
+  !> 0-based). name: letters, digits and '_' (a group and an XDMF grid name).
+  subroutine field_snapshot_add_surface(snapshot, name, vertices, faces)
+    type(field_snapshot_t), intent(inout) :: snapshot
+    character(len=*), intent(in) :: name
+    real(wp), intent(in) :: vertices(:,:)
+    integer, intent(in) :: faces(:,:)
+    if (len_trim(name) == 0 .or. len_trim(name) > word_length .or. &
+        verify(trim(name), 'abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_') /= 0) &
+      call fatal('field_output: surface name "'//trim(name)//'" must be 1-64 letters, digits or _')
+    if (index(' '//snapshot%surfaces//' ', ' '//trim(name)//' ') > 0) &
+      call fatal('field_output: surface '//trim(name)//' added twice to one snapshot')
+    if (size(vertices, 1) /= 3 .or. size(faces, 1) /= 3 .or. size(faces, 2) < 1) &
+      call fatal('field_output: surface '//trim(name)//' needs vertices(3, n) and faces(3, m), m >= 1')
+    if (any(faces < 1) .or. any(faces > size(vertices, 2))) &
+      call fatal('field_output: surface '//trim(name)//' has a face with a vertex index outside 1..'// &
+                 int_text(size(vertices, 2)))
+    call h5_write_array(snapshot%file, 'surfaces/'//trim(name)//'/vertices', vertices)
+    call h5_write_array(snapshot%file, 'surfaces/'//trim(name)//'/faces', faces - 1)
+    snapshot%surfaces = trim(adjustl(snapshot%surfaces//' '//trim(name)))
+  end subroutine field_snapshot_add_surface
+
   !> Finish a snapshot (collective): metadata, close, rename complete, rebuild fields.xdmf.
   subroutine field_snapshot_end(snapshot)
     type(field_snapshot_t), intent(inout) :: snapshot
@@ -155,6 +190,7 @@ contains
     call h5_write_array(snapshot%file, 'grid/spacing', snapshot%lengths / real(snapshot%global_shape, wp))
     call h5_write_string(snapshot%file, 'field_names', snapshot%names)
     call h5_write_string(snapshot%file, 'field_locations', snapshot%locations)
+    if (len(snapshot%surfaces) > 0) call h5_write_string(snapshot%file, 'surface_names', snapshot%surfaces)
     call h5_close(snapshot%file)   ! renames the .tmp file once every rank has written
     if (is_root()) then
       if (snapshot%directory == run_directory_path()) call record_run_file(xdmf_name)
@@ -278,6 +314,7 @@ contains
       call read_real3(file, 'grid/lengths', records(n)%lengths)
       call h5_read_string(file, 'field_names', records(n)%names)
       call h5_read_string(file, 'field_locations', records(n)%locations)
+      call read_surface_counts(file, records(n))
       call h5_close(file)
     end do
     records = records(1:n)
@@ -292,6 +329,31 @@ contains
       records(j + 1) = swap
     end do
   end subroutine find_snapshots
+
+  !> The names of a snapshot's surfaces and their vertex and face counts (none in older files).
+  subroutine read_surface_counts(file, record)
+    type(h5_file_t), intent(in) :: file
+    type(snapshot_record_t), intent(inout) :: record
+    character(len=word_length), allocatable :: names(:)
+    integer :: s
+    record%surfaces = ''
+    if (h5_exists(file, 'surface_names')) call h5_read_string(file, 'surface_names', record%surfaces)
+    names = words(record%surfaces)
+    allocate(record%surface_vertices(size(names)), record%surface_faces(size(names)))
+    do s = 1, size(names)
+      record%surface_vertices(s) = second_dimension('surfaces/'//trim(names(s))//'/vertices')
+      record%surface_faces(s) = second_dimension('surfaces/'//trim(names(s))//'/faces')
+    end do
+  contains
+    integer function second_dimension(name)
+      character(len=*), intent(in) :: name
+      integer(i8), allocatable :: dims(:)
+      dims = h5_dataset_shape(file, name)
+      if (size(dims) /= 2) call fatal('field_output: '//name//' of '//file%path//' is not (3, n)', collective=.false.)
+      if (dims(1) /= 3_i8) call fatal('field_output: '//name//' of '//file%path//' is not (3, n)', collective=.false.)
+      second_dimension = int(dims(2))
+    end function second_dimension
+  end subroutine read_surface_counts
 
   subroutine read_int3(file, name, values)
     type(h5_file_t), intent(in) :: file
@@ -380,8 +442,33 @@ contains
       end do
       write(unit, '(a)') '        </Grid>'
     end do
+    call write_xdmf_surfaces(unit, record)
     write(unit, '(a)') '      </Grid>'
   end subroutine write_xdmf_snapshot
+
+  !> One Triangle grid per surface of the snapshot (XDMF 3: connectivity 0-based, XYZ vertices).
+  subroutine write_xdmf_surfaces(unit, record)
+    integer, intent(in) :: unit
+    type(snapshot_record_t), intent(in) :: record
+    character(len=word_length), allocatable :: names(:)
+    character(len=:), allocatable :: group
+    integer :: s
+    names = words(record%surfaces)
+    do s = 1, size(names)
+      group = trim(record%file_name)//':/surfaces/'//trim(names(s))
+      write(unit, '(a)') '        <Grid Name="'//trim(names(s))//'" GridType="Uniform">'
+      write(unit, '(a)') '          <Topology TopologyType="Triangle" NumberOfElements="'// &
+                         int_text(record%surface_faces(s))//'">'
+      write(unit, '(a)') '            <DataItem Dimensions="'//int_text(record%surface_faces(s))//' 3" '// &
+                         'NumberType="Int" Precision="4" Format="HDF">'//group//'/faces</DataItem>'
+      write(unit, '(a)') '          </Topology>'
+      write(unit, '(a)') '          <Geometry GeometryType="XYZ">'
+      write(unit, '(a)') '            <DataItem Dimensions="'//int_text(record%surface_vertices(s))//' 3" '// &
+                         'NumberType="Float" Precision="8" Format="HDF">'//group//'/vertices</DataItem>'
+      write(unit, '(a)') '          </Geometry>'
+      write(unit, '(a)') '        </Grid>'
+    end do
+  end subroutine write_xdmf_surfaces
 
   !> The blank-separated words of text.
   function words(text) result(list)

@@ -75,13 +75,13 @@ module hdf5_io
   !> Write a real(wp) / integer / integer(i8) scalar or array (rank 0's values).
   interface h5_write_array
     module procedure write_real_scalar, write_real_1d, write_real_2d, write_int_scalar, write_int_1d, &
-                     write_i8_scalar, write_i8_1d
+                     write_int_2d, write_i8_scalar, write_i8_1d
   end interface h5_write_array
 
   !> Read a dataset written by h5_write_array; arrays are (re)allocated to the stored shape.
   interface h5_read_array
     module procedure read_real_scalar, read_real_1d, read_real_2d, read_int_scalar, read_int_1d, &
-                     read_i8_scalar, read_i8_1d
+                     read_int_2d, read_i8_scalar, read_i8_1d
   end interface h5_read_array
 
   !> Append to an extendible dataset (created on first use): values(:) adds size(values) entries to a
@@ -720,6 +720,20 @@ contains
     end if
   end subroutine write_int_1d
 
+  subroutine write_int_2d(file, name, values)
+    type(h5_file_t), intent(in) :: file
+    character(len=*), intent(in) :: name
+    integer, intent(in), contiguous, target :: values(:,:)
+    integer :: rows, columns
+    rows = root_count(file, size(values, 1))
+    columns = root_count(file, size(values, 2))
+    if (is_writer(file) .and. rows * columns > 0) then
+      call write_whole(file, name, int_type(), int([rows, columns], hsize_t), c_loc(values))
+    else
+      call write_whole(file, name, int_type(), int([rows, columns], hsize_t), c_loc(empty_int))
+    end if
+  end subroutine write_int_2d
+
   subroutine write_i8_scalar(file, name, value)
     type(h5_file_t), intent(in) :: file
     character(len=*), intent(in) :: name
@@ -807,6 +821,21 @@ contains
       call read_whole(file, name, dataset, int_type(), c_loc(empty_int))
     end if
   end subroutine read_int_1d
+
+  subroutine read_int_2d(file, name, values)
+    type(h5_file_t), intent(in) :: file
+    character(len=*), intent(in) :: name
+    integer, allocatable, target, intent(out) :: values(:,:)
+    integer(hid_t) :: dataset
+    integer(hsize_t), allocatable :: dims(:)
+    call open_for_reading(file, name, 2, dataset, dims)
+    allocate(values(dims(1), dims(2)))
+    if (size(values) > 0) then
+      call read_whole(file, name, dataset, int_type(), c_loc(values))
+    else
+      call read_whole(file, name, dataset, int_type(), c_loc(empty_int))
+    end if
+  end subroutine read_int_2d
 
   subroutine read_i8_scalar(file, name, value)
     type(h5_file_t), intent(in) :: file
