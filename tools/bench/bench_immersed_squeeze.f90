@@ -1,0 +1,53 @@
+!> Squeeze film (make validate; docs/validation.md, "Lubrication"; ibm notes section 8.5, rung 11):
+!> two equal spheres approaching head-on at fixed speed in Stokes flow, the gap held fixed and the
+!> flow run to steady state at each gap (src/driver/squeeze_case.f90), against Brenner's exact force
+!> of two spheres. The gap (in cells) below which the error passes 10-20% is where the immersed
+!> boundary stops carrying the squeeze force: the hand-over gap of the sub-grid lubrication
+!> (&collision lubrication_handover). Prints a Markdown table.
+!> Optional arguments: D/dx, box width n_y (cells), then the gaps in cells (default 8, 32, and
+!> 4 3 2 1.5 1 0.75 0.5).
+program bench_immersed_squeeze
+  use agglo_kinds, only: wp
+  use parallel_env, only: parallel_start, parallel_stop, is_root
+  use squeeze_case, only: squeeze_case_t, squeeze_result_t, run_squeeze
+  implicit none
+  type(squeeze_case_t) :: case
+  type(squeeze_result_t) :: result
+  real(wp), allocatable :: gaps(:)
+  character(len=32) :: argument
+  integer :: g, count
+  character(len=*), parameter :: row_format = '(a,f4.1,a,i0,a,i0,a,f5.2,a,f7.4,a,es11.4,a,es11.4,a,f7.2,a,i0,a,a,a,f7.1,a)'
+
+  call parallel_start()
+  count = command_argument_count()
+  if (count >= 1) then
+    call get_command_argument(1, argument)
+    read(argument, *) case%diameter_cells
+  end if
+  if (count >= 2) then
+    call get_command_argument(2, argument)
+    read(argument, *) case%width_cells
+  end if
+  if (count >= 3) then
+    allocate(gaps(count - 2))
+    do g = 3, count
+      call get_command_argument(g, argument)
+      read(argument, *) gaps(g - 2)
+    end do
+  else
+    gaps = [4.0_wp, 3.0_wp, 2.0_wp, 1.5_wp, 1.0_wp, 0.75_wp, 0.5_wp]
+  end if
+  if (is_root()) then
+    print '(a)', '| D/dx | box (cells) | h/dx | h/a | F resolved (N) | F Brenner (N) | error | steps | steady | wall s |'
+    print '(a)', '|---|---|---|---|---|---|---|---|---|---|'
+  end if
+  do g = 1, size(gaps)
+    case%gap_cells = gaps(g)
+    call run_squeeze(case, result)
+    if (is_root()) print row_format, '| ', case%diameter_cells, ' | ', 2 * case%width_cells, 'x', case%width_cells, &
+        '^2 | ', case%gap_cells, ' | ', result%gap_over_radius, ' | ', result%force, ' | ', result%reference, ' | ', &
+        100 * result%error, '% | ', result%steps, ' | ', trim(merge('yes', 'no ', result%steady)), ' | ', &
+        result%wall_seconds, ' |'
+  end do
+  call parallel_stop()
+end program bench_immersed_squeeze
