@@ -27,7 +27,8 @@ module squeeze_case
   use immersed_scene, only: prescribed_motion_t, immersed_scene_t, immersed_scene_create, immersed_step
   implicit none
   private
-  public :: squeeze_case_t, squeeze_result_t, run_squeeze, brenner_squeeze_coefficient
+  public :: squeeze_case_t, squeeze_result_t, run_squeeze, brenner_squeeze_coefficient, squeeze_speed, &
+            squeeze_dynamic_viscosity
 
   type :: squeeze_case_t
     real(wp) :: diameter_cells = 8.0_wp          !< D / dx
@@ -45,6 +46,8 @@ module squeeze_case
     real(wp) :: reference = 0              !< N, 6 pi mu a U beta (Brenner)
     real(wp) :: error = 0                  !< force / reference - 1
     real(wp) :: gap_over_radius = 0        !< eps = h / a
+    real(wp) :: radius = 0                 !< m, a
+    real(wp) :: cell = 0                   !< m, dx
     real(wp) :: reynolds = 0               !< 2 U a / nu
     integer :: steps = 0
     logical :: steady = .false.
@@ -53,6 +56,8 @@ module squeeze_case
 
   ! Water-like units; U a / nu = 1e-5 at D/dx = 8 on a 1 mm box.
   real(wp), parameter :: box = 1.0e-3_wp, viscosity = 1.0e-6_wp, density = 1000.0_wp, speed = 1.0e-7_wp
+  real(wp), parameter :: squeeze_speed = speed                            !< m/s, U of each sphere
+  real(wp), parameter :: squeeze_dynamic_viscosity = density * viscosity  !< Pa s, mu
 
 contains
 
@@ -132,6 +137,8 @@ contains
     end do
     result%force = force_new
     result%gap_over_radius = gap / radius
+    result%radius = radius
+    result%cell = h
     result%reference = 6.0_wp * pi * density * viscosity * radius * speed &
                        * brenner_squeeze_coefficient(result%gap_over_radius)
     result%error = result%force / result%reference - 1.0_wp
