@@ -167,7 +167,7 @@ validate: deps ## run the immersed-boundary validation ladder (the table in docs
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_immersed_ladder
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_immersed_surface
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_immersed_moving
-	$(MPIRUN) -np 1 $(BUILD)/bench/bench_immersed_squeeze 8 32 8 6 4 3 2 1.5 1 0.75 0.5
+	$(MPIRUN) -np 1 $(BUILD)/bench/bench_immersed_squeeze
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_immersed_squeeze 12 48 12 4 3 2 1.5 1 0.75 0.5
 
 clean: ## remove the build directory

@@ -18,7 +18,7 @@ module config_collision
     logical :: lubrication = .false.                !< sub-grid normal lubrication force
     !> hand-over gap h_out in cells of &grid (the smallest spacing): the resolved fluid carries the
     !> squeeze force above it (docs/validation.md, "Lubrication")
-    real(wp) :: lubrication_handover = 2.0_wp
+    real(wp) :: lubrication_handover = 1.0_wp
     real(wp) :: lubrication_roughness = 1.0e-9_wp   !< m, h_in: the force saturates below this gap
   end type collision_config_t
 

@@ -9,8 +9,8 @@
 !> hardly depends on h, and the increase is what the sub-grid model must add below the hand-over
 !> (R(h) - R(h_out), src/particles/lubrication.f90). The last two error columns are those of the
 !> total force with the sub-grid model on, F(h) + (R(h) - R(h_out)) 2U, for h_out = 1 and 2 cells.
-!> Optional arguments: D/dx, box width n_y (cells), then the gaps in cells (default 8, 32, and
-!> 4 3 2 1.5 1 0.75 0.5).
+!> Optional arguments: D/dx, box width n_y (cells), then the gaps in cells, the widest first (default
+!> 8, 32, and 8 6 4 3 2 1.5 1 0.75 0.5 0.25 0.1 0.02 0.004).
 program bench_immersed_squeeze
   use agglo_kinds, only: wp
   use parallel_env, only: parallel_start, parallel_stop, is_root
@@ -23,7 +23,7 @@ program bench_immersed_squeeze
   character(len=32) :: argument
   integer :: g, count
   character(len=*), parameter :: row_format = &
-      '(a,f4.1,a,i0,a,i0,a,f5.2,a,f7.4,a,es11.4,a,es11.4,a,f7.2,a,f7.2,a,f7.2,a,f7.2,a,i0,a,a,a,f7.1,a)'
+      '(a,f4.1,a,i0,a,i0,a,f6.3,a,f7.4,a,es11.4,a,es11.4,a,f7.2,a,f7.2,a,f7.2,a,f7.2,a,i0,a,a,a,f7.1,a)'
 
   call parallel_start()
   count = command_argument_count()
@@ -42,7 +42,8 @@ program bench_immersed_squeeze
       read(argument, *) gaps(g - 2)
     end do
   else
-    gaps = [4.0_wp, 3.0_wp, 2.0_wp, 1.5_wp, 1.0_wp, 0.75_wp, 0.5_wp]
+    gaps = [8.0_wp, 6.0_wp, 4.0_wp, 3.0_wp, 2.0_wp, 1.5_wp, 1.0_wp, 0.75_wp, 0.5_wp, 0.25_wp, 0.1_wp, 0.02_wp, &
+            0.004_wp]
   end if
   if (is_root()) then
     print '(a)', '| D/dx | box (cells) | h/dx | h/a | F resolved (N) | F Brenner (N) | error | ' // &
