@@ -109,11 +109,11 @@ contains
   !> Two unit vectors spanning the plane normal to n.
   pure function tangent_basis(normal) result(tangents)
     real(wp), intent(in) :: normal(3)
-    real(wp) :: tangents(3, 2), n(3), helper(3)
+    real(wp) :: tangents(3, 2), n(3), reference_axis(3)
     n = normal / norm2(normal)
-    helper = [1.0_wp, 0.0_wp, 0.0_wp]
-    if (abs(n(1)) > 0.6_wp) helper = [0.0_wp, 1.0_wp, 0.0_wp]
-    tangents(:, 1) = cross(n, helper)
+    reference_axis = [1.0_wp, 0.0_wp, 0.0_wp]
+    if (abs(n(1)) > 0.6_wp) reference_axis = [0.0_wp, 1.0_wp, 0.0_wp]
+    tangents(:, 1) = cross(n, reference_axis)
     tangents(:, 1) = tangents(:, 1) / norm2(tangents(:, 1))
     tangents(:, 2) = cross(n, tangents(:, 1))
   end function tangent_basis
