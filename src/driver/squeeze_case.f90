@@ -11,7 +11,7 @@
 !>   beta = (4/3) sinh(al) sum_{n>=1} n (n+1) / ((2n-1)(2n+3))
 !>          [ (4 cosh^2((n+1/2) al) + (2n+1)^2 sinh^2(al)) / (2 sinh((2n+1) al) - (2n+1) sinh(2 al)) - 1 ],
 !> cosh(al) = 1 + h / (2a). Near contact beta = 1/(2 eps) - (9/20) ln eps - (3/56) eps ln eps + 1.346
-!> (eps = h/a; Cox & Brenner 1967; Jeffrey & Onishi 1984; Costa et al. 2015, Eq. 10), which
+!> (eps = h/a; Cox & Brenner 1967; Jeffrey & Onishi 1984; Costa et al. 2015, who quote the constant 1.346), which
 !> tests/unit/test_lubrication checks against the series.
 !> The box is 2 n_y cells long along x and n_y = box_diameters D wide: the periodic images of the
 !> pair (a force dipole) change the force by a few per cent at the widest gaps (the table says so).

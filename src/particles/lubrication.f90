@@ -19,8 +19,8 @@
 !> The logarithmic terms use the equivalent sphere radii a_i = 2 / tr K_i (mean radius of curvature of
 !> surface i at its closest point; exact for spheres, an approximation for spheroids).
 !>
-!> Hand-over (Costa, Boersma, Westerweel & Breugem 2015, Phys. Rev. E 92, 053012, Eq. 11 form): the
-!> grid resolves the squeeze flow down to the gap h_out, so only the unresolved part is added,
+!> Hand-over (Costa, Boersma, Westerweel & Breugem 2015, Phys. Rev. E 92, 053012: lambda(eps) -
+!> lambda(eps_out)): the grid resolves the squeeze flow down to the gap h_out, so only the unresolved part is added,
 !>   R_sub(h) = R(max(h, h_in)) - R(h_out)  for h < h_out,   0 for h >= h_out,
 !> saturated below the roughness gap h_in (Costa et al.: the force stays finite at contact).
 !>

@@ -54,8 +54,8 @@ program test_lubrication
   call check_close(lubrication_resistance(model, geometry, gap), expected, 1.0e-10_wp, 'unequal_spheres_resistance')
 
   ! Equal spheres against Brenner's exact series (squeeze_case): each sphere at U = v_n / 2, F = 6 pi
-  ! mu a U beta, so R = 3 pi mu a beta up to the O(1) constant 1.3458 of the series (Costa et al. 2015,
-  ! Eq. 10) and O(eps): at eps = 1e-3 the remainder is below 2e-3 of 3 pi mu a.
+  ! mu a U beta, so R = 3 pi mu a beta up to the O(1) constant 1.3458 of the series (quoted by Costa
+  ! et al. 2015) and O(eps): at eps = 1e-3 the remainder is below 2e-3 of 3 pi mu a.
   call place(sphere1, [0.0_wp, 0.0_wp, 0.0_wp], identity, sphere1, [2.0_wp * a1 + 1.0e-3_wp * a1, 0.0_wp, 0.0_wp], &
              identity)
   geometry = lubrication_geometry(sphere1, body1, sphere1, body2, contact)
@@ -64,7 +64,7 @@ program test_lubrication
   call check_close(lubrication_resistance(model, geometry, eps * a1) / (3.0_wp * pi * mu * a1), beta - 1.3458_wp, &
                    0.0_wp, 'equal_spheres_vs_brenner_series', abs_tol=2.0e-3_wp)
   ! The series itself against its near-contact expansion 1/(2 eps) - (9/20) ln eps - (3/56) eps ln eps
-  ! + 1.3458 at eps = 1e-2 (Costa et al. 2015, Eq. 10).
+  ! + 1.3458 at eps = 1e-2 (Costa et al. 2015 quote this expansion with 1.346).
   eps = 1.0e-2_wp
   call check_close(brenner_squeeze_coefficient(eps), 0.5_wp / eps - 0.45_wp * log(eps) - 3.0_wp / 56.0_wp * eps * log(eps) &
                    + 1.3458_wp, 0.0_wp, 'brenner_series_near_contact', abs_tol=5.0e-3_wp)
