@@ -6,6 +6,7 @@ module config_checks
   use namelist_text, only: namelist_item_t, item_is_text, item_text_fills, item_text_values, item_is_finite
   use deck_file, only: int_text, real_text
   use config_forcing, only: forcing_mode_extent
+  use config_grid, only: smallest_spacing
   use error_handling, only: input_error, fatal
   implicit none
   private
@@ -238,5 +239,14 @@ contains
           real_text(detect)//' m, the collision detection distance at the start, max(&collision '// &
           'detection_floor, detection_factor * relative_speed * &run dt / &scene particle_substeps)')
     end if
+    if (cfg%collision%lubrication) then
+      if (cfg%scene%fluid == 'none') call input_error('collision', 'lubrication', '.true. with &scene fluid = ''none''', &
+          '.false. (no fluid, no lubrication), or &scene fluid = ''stokes'' | ''resolved''')
+      if (.not. (cfg%collision%lubrication_roughness < cfg%collision%lubrication_handover * smallest_spacing(cfg%grid))) &
+        call input_error('collision', 'lubrication_roughness', real_text(cfg%collision%lubrication_roughness), &
+          '< the hand-over gap lubrication_handover * &grid spacing = '// &
+          real_text(cfg%collision%lubrication_handover * smallest_spacing(cfg%grid))//' m')
+    end if
   end subroutine check_particle_cross
+
 end module config_checks

@@ -1,4 +1,5 @@
-!> Namelist group &collision: hard-body collisions (detection distance and impulse model).
+!> Namelist group &collision: hard-body collisions (detection distance and impulse model) and the
+!> optional sub-grid lubrication (particles/lubrication.f90; off by default: the paper has none).
 !> Defaults: the paper's model (section 2.2.4, Eq. 24) with Table 1's restitution.
 module config_collision
   use agglo_kinds, only: wp
@@ -14,11 +15,19 @@ module config_collision
     real(wp) :: friction_coefficient = 0.1_wp       !< Coulomb friction mu_c (model = 'coulomb' only)
     real(wp) :: detection_floor = 1.0e-9_wp         !< m, smallest detection distance
     real(wp) :: detection_factor = 1.0_wp           !< detection distance = max(floor, factor v_n dt)
+    logical :: lubrication = .false.                !< sub-grid normal lubrication force
+    !> hand-over gap h_out in cells of &grid (the smallest spacing): the resolved fluid carries the
+    !> squeeze force above it (docs/validation.md, "Lubrication")
+    real(wp) :: lubrication_handover = 1.0_wp
+    real(wp) :: lubrication_roughness = 1.0e-9_wp   !< m, h_in: the force saturates below this gap
   end type collision_config_t
 
-  real(wp) :: restitution, friction_coefficient, detection_floor, detection_factor
+  real(wp) :: restitution, friction_coefficient, detection_floor, detection_factor, lubrication_handover, &
+              lubrication_roughness
   character(len=16) :: model
-  namelist /collision/ restitution, model, friction_coefficient, detection_floor, detection_factor
+  logical :: lubrication
+  namelist /collision/ restitution, model, friction_coefficient, detection_floor, detection_factor, lubrication, &
+                       lubrication_handover, lubrication_roughness
 
 contains
 
@@ -26,12 +35,16 @@ contains
     type(collision_config_t), intent(in) :: cfg
     restitution = cfg%restitution; model = cfg%model; friction_coefficient = cfg%friction_coefficient
     detection_floor = cfg%detection_floor; detection_factor = cfg%detection_factor
+    lubrication = cfg%lubrication; lubrication_handover = cfg%lubrication_handover
+    lubrication_roughness = cfg%lubrication_roughness
   end subroutine to_namelist
 
   subroutine from_namelist(cfg)
     type(collision_config_t), intent(inout) :: cfg
     cfg%restitution = restitution; cfg%model = model; cfg%friction_coefficient = friction_coefficient
     cfg%detection_floor = detection_floor; cfg%detection_factor = detection_factor
+    cfg%lubrication = lubrication; cfg%lubrication_handover = lubrication_handover
+    cfg%lubrication_roughness = lubrication_roughness
   end subroutine from_namelist
 
   subroutine read_collision_group(deck, cfg)
@@ -52,6 +65,8 @@ contains
     call require_nonnegative('collision', 'friction_coefficient', cfg%friction_coefficient)
     call require_positive('collision', 'detection_floor', cfg%detection_floor)
     call require_positive('collision', 'detection_factor', cfg%detection_factor)
+    call require_positive('collision', 'lubrication_handover', cfg%lubrication_handover)
+    call require_positive('collision', 'lubrication_roughness', cfg%lubrication_roughness)
   end subroutine check_collision_group
 
   subroutine write_collision_group(unit, cfg)

@@ -4,7 +4,7 @@ module config_grid
   use deck_file, only: deck_t, check_namelist_read, require_positive, require_positive_int
   implicit none
   private
-  public :: grid_config_t, read_grid_group, check_grid_group, write_grid_group
+  public :: grid_config_t, read_grid_group, check_grid_group, write_grid_group, smallest_spacing
 
   type :: grid_config_t
     integer :: nx = 64, ny = 64, nz = 64                 !< cells per direction
@@ -58,4 +58,10 @@ contains
     call to_namelist(cfg)
     write(unit, nml=grid)
   end subroutine write_grid_group
+
+  !> m, the smallest cell edge of the grid.
+  pure real(wp) function smallest_spacing(cfg)
+    type(grid_config_t), intent(in) :: cfg
+    smallest_spacing = min(cfg%length_x / cfg%nx, cfg%length_y / cfg%ny, cfg%length_z / cfg%nz)
+  end function smallest_spacing
 end module config_grid

@@ -63,13 +63,14 @@ contains
     call check_scene_combinations(cfg)
     call check_output_group(cfg%output)
     if (cfg%scene%fluid /= 'none') call check_fluid_group(cfg%fluid)
-    if (cfg%scene%fluid == 'resolved') call check_grid_group(cfg%grid)
+    ! The lubrication hand-over gap is counted in &grid cells in every scene.
+    if (cfg%scene%fluid == 'resolved' .or. cfg%collision%lubrication) call check_grid_group(cfg%grid)
     if (cfg%scene%forcing /= 'none') call check_forcing_group(cfg%forcing)
     if (cfg%scene%particles == 'prescribed') call check_bodies_group(cfg%bodies)
     if (cfg%scene%particles == 'pair') then
       call check_pair_group(cfg%pair)
       if (cfg%scene%dlvo) call check_dlvo_group(cfg%dlvo)
-      if (cfg%scene%collisions) call check_collision_group(cfg%collision)
+      if (cfg%scene%collisions .or. cfg%collision%lubrication) call check_collision_group(cfg%collision)
     end if
     call check_cross_groups(cfg, nranks)
   end subroutine parse_config

@@ -31,6 +31,8 @@ module pair_scene
   use closest_points, only: symmetry_axis_angle
   use dlvo, only: dlvo_setup, dlvo_log_constants
   use collision, only: collision_setup, collision_log_settings, approach_speed
+  use lubrication, only: lubrication_setup
+  use config_grid, only: smallest_spacing
   use stokes_resistance, only: stokes_resistance_t, stokes_resistance_of, stokes_loads
   use particle_system, only: particle_models_t, particle_loads_t, particle_system_t, particle_system_create, &
                              particle_system_interact, particle_system_step, particle_loads_zero, pair_body_image
@@ -294,6 +296,9 @@ contains
       call collision_setup(models%collision_model, cfg%collision)
       call collision_log_settings(models%collision_model)
     end if
+    models%lubrication = cfg%collision%lubrication
+    if (models%lubrication) call lubrication_setup(models%lubrication_model, cfg%collision, &
+                                                   cfg%fluid%density * cfg%fluid%viscosity, smallest_spacing(cfg%grid))
     call particle_system_create(system, [pair%shape, pair%shape], pair%body, models, box_length=box_length, &
                                 contacts=[pair%contact])
   end subroutine setup_system

@@ -23,8 +23,9 @@
 !> and then the 2-3 test sees the velocity body 2 has just received: the Newton's cradle result.
 !> Every impulse conserves linear and angular momentum and, with e = 1 head-on, energy (to round-off).
 !> Pairs whose bounding spheres are farther apart than models%interaction_gap skip steps 2-4.
-!> A per-pair lubrication correction (docs/design.md, data flow) belongs with the DLVO loads of
-!> step 4: it would see the post-impulse velocities, as the Stokes drag of the pair scenes does.
+!> Optional sub-grid lubrication (module lubrication): after the collisions of step 3, pair by pair
+!> in the same order, an impulse implicit in the pair's normal velocity over dt, applied at once;
+!> its force (impulse / dt) is kept per body in lubrication_loads for the outputs.
 !>
 !> Periodic box (box_length > 0 in a direction): bodies live on a torus. A pair is handled with
 !> body j moved to its minimum image next to body i (positions, closest points, DLVO lever arms and
@@ -39,6 +40,7 @@ module particle_system
   use closest_points, only: closest_points_t, find_closest_points
   use dlvo, only: dlvo_model_t, dlvo_evaluation_t, dlvo_evaluate
   use collision, only: collision_model_t, collision_result_t, collision_detected, collide
+  use lubrication, only: lubrication_model_t, lubrication_result_t, lubricate
   use vector_algebra, only: cross
   use periodic_box, only: image_shift
   implicit none
@@ -53,6 +55,8 @@ module particle_system
     type(dlvo_model_t) :: dlvo_model
     logical :: collisions = .false.            !< hard-body collision test and impulse
     type(collision_model_t) :: collision_model
+    logical :: lubrication = .false.           !< sub-grid lubrication impulse every step
+    type(lubrication_model_t) :: lubrication_model
     integer :: integrator = 0                  !< rigid_body integrator code (integrator_euler | integrator_verlet)
     !> Pairs whose bounding spheres are farther apart than this gap (m) skip the per-pair work (no
     !> closest points, no DLVO, no collision). huge(): every pair always interacts (the pair scenes,
@@ -73,6 +77,7 @@ module particle_system
     type(dlvo_evaluation_t) :: dlvo            !< DLVO at the current state (defaults when off/inactive)
     logical :: collided = .false.              !< an impulse was applied in the last interaction
     type(collision_result_t) :: collision      !< that impulse (contact point in the pair's frame)
+    type(lubrication_result_t) :: lubrication  !< the last lubrication impulse (inactive above h_out)
   end type particle_pair_t
 
   type :: particle_system_t
@@ -85,6 +90,7 @@ module particle_system
     type(particle_pair_t), allocatable :: pairs(:)       !< (n (n - 1) / 2), in the order of the sweep
     type(particle_loads_t) :: dlvo_loads                 !< summed over pairs, current state
     type(particle_loads_t) :: collision_loads            !< impulse / dt of the last interaction (outputs)
+    type(particle_loads_t) :: lubrication_loads          !< lubrication impulse / dt of the last interaction
     integer :: collisions_last = 0                       !< impulses in the last interaction
     integer(i8) :: collisions_total = 0_i8               !< impulses since creation
   end type particle_system_t
@@ -143,6 +149,7 @@ contains
     end if
     system%dlvo_loads = particle_loads_zero(system%n)
     system%collision_loads = particle_loads_zero(system%n)
+    system%lubrication_loads = particle_loads_zero(system%n)
   end subroutine particle_system_create
 
   !> One particle step of length dt (module header): Newton-Euler under external + DLVO loads, then
@@ -189,6 +196,10 @@ contains
     system%collisions_last = 0
     do p = 1, size(system%pairs)
       call collide_pair(system, system%pairs(p), dt)
+    end do
+    system%lubrication_loads = particle_loads_zero(system%n)
+    do p = 1, size(system%pairs)
+      call lubricate_pair(system, system%pairs(p), dt)
     end do
     system%dlvo_loads%force = 0.0_wp
     system%dlvo_loads%torque = 0.0_wp
@@ -255,6 +266,27 @@ contains
           + cross(pair%collision%contact_point - second%position, force)
     end associate
   end subroutine collide_pair
+
+  !> Lubrication impulse of one pair at its closest points (module lubrication), applied at once.
+  subroutine lubricate_pair(system, pair, dt)
+    type(particle_system_t), intent(inout) :: system
+    type(particle_pair_t), intent(inout) :: pair
+    real(wp), intent(in) :: dt
+    type(rigid_body_t) :: second
+    pair%lubrication = lubrication_result_t()
+    if (.not. (system%models%lubrication .and. pair%active)) return
+    second = pair_body_image(system, pair)
+    call lubricate(system%models%lubrication_model, system%shapes(pair%first), system%bodies(pair%first), &
+                   system%shapes(pair%second), second, pair%contact, dt, pair%lubrication)
+    system%bodies(pair%second)%velocity = second%velocity
+    system%bodies(pair%second)%angular_velocity_body = second%angular_velocity_body
+    associate (loads => system%lubrication_loads)
+      loads%force(:, pair%first) = loads%force(:, pair%first) - pair%lubrication%force
+      loads%torque(:, pair%first) = loads%torque(:, pair%first) + pair%lubrication%torque1
+      loads%force(:, pair%second) = loads%force(:, pair%second) + pair%lubrication%force
+      loads%torque(:, pair%second) = loads%torque(:, pair%second) + pair%lubrication%torque2
+    end associate
+  end subroutine lubricate_pair
 
   !> DLVO loads of one pair at its closest points, added to both bodies.
   subroutine dlvo_pair(system, pair)

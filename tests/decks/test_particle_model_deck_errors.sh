@@ -44,6 +44,19 @@ expect_error curvature_factor_unknown "&dlvo curvature_factor = 'schiller' is no
   "&dlvo curvature_factor = 'schiller' /"
 expect_error integrator_unknown "&pair integrator = 'rk4' is not allowed; allowed: one of 'euler' | 'verlet'" \
   "&pair integrator = 'rk4' /"
+stokes="&run name = 'p', end_time = 1.0e-6, dt = 1.0e-7, overwrite = .true. /
+&scene fluid = 'stokes', particles = 'pair' /"
+expect_deck_error lubrication_without_fluid 1 "$base
+&collision lubrication = .true. /" "&collision lubrication = .true. with &scene fluid = 'none' is not allowed"
+expect_deck_error lubrication_roughness_zero 1 "$stokes
+&collision lubrication = .true., lubrication_roughness = 0.0 /" \
+  "&collision lubrication_roughness = 0.00000E+00 is not allowed; allowed: > 0"
+expect_deck_error lubrication_handover_negative 1 "$stokes
+&collision lubrication = .true., lubrication_handover = -1.0 /" \
+  "&collision lubrication_handover = -1.00000E+00 is not allowed; allowed: > 0"
+expect_deck_error lubrication_roughness_vs_handover 1 "$stokes
+&collision lubrication = .true., lubrication_roughness = 1.0e-4 /" \
+  "&collision lubrication_roughness = 1.00000E-04 is not allowed; allowed: < the hand-over gap"
 
 # The defaults (Table 1) and every option pass the checks (the run may stop later for other reasons,
 # but never with a deck error from these groups).

@@ -1,0 +1,85 @@
+!> Squeeze film (make validate; docs/validation.md, "Lubrication"; ibm notes section 8.5, rung 11):
+!> two equal spheres approaching head-on at fixed speed in Stokes flow, the gap held fixed and the
+!> flow run to steady state at each gap (src/driver/squeeze_case.f90), against Brenner's exact force
+!> of two spheres. The gap (in cells) below which the error passes 10-20% is where the immersed
+!> boundary stops carrying the squeeze force: the hand-over gap of the sub-grid lubrication
+!> (&collision lubrication_handover). Prints a Markdown table. Besides the force itself, the table
+!> gives the error of its increase from the first (widest) gap of the list, F(h) - F(h_1) against
+!> the same difference of Brenner's force: the periodic box changes the force by an amount that
+!> hardly depends on h, and the increase is what the sub-grid model must add below the hand-over
+!> (R(h) - R(h_out), src/particles/lubrication.f90). The last two error columns are those of the
+!> total force with the sub-grid model on, F(h) + (R(h) - R(h_out)) 2U, for h_out = 1 and 2 cells.
+!> Optional arguments: D/dx, box width n_y (cells), then the gaps in cells, the widest first (default
+!> 8, 32, and 8 6 4 3 2 1.5 1 0.75 0.5 0.25 0.1 0.02 0.004).
+program bench_immersed_squeeze
+  use agglo_kinds, only: wp
+  use parallel_env, only: parallel_start, parallel_stop, is_root
+  use squeeze_case, only: squeeze_case_t, squeeze_result_t, run_squeeze, squeeze_speed, squeeze_dynamic_viscosity
+  use lubrication, only: lubrication_model_t, lubrication_geometry_t, lubrication_subgrid_resistance
+  implicit none
+  type(squeeze_case_t) :: case
+  type(squeeze_result_t) :: result, widest
+  real(wp), allocatable :: gaps(:)
+  character(len=32) :: argument
+  integer :: g, count
+  character(len=*), parameter :: row_format = &
+      '(a,f4.1,a,i0,a,i0,a,f6.3,a,f7.4,a,es11.4,a,es11.4,a,f7.2,a,f7.2,a,f7.2,a,f7.2,a,i0,a,a,a,f7.1,a)'
+
+  call parallel_start()
+  count = command_argument_count()
+  if (count >= 1) then
+    call get_command_argument(1, argument)
+    read(argument, *) case%diameter_cells
+  end if
+  if (count >= 2) then
+    call get_command_argument(2, argument)
+    read(argument, *) case%width_cells
+  end if
+  if (count >= 3) then
+    allocate(gaps(count - 2))
+    do g = 3, count
+      call get_command_argument(g, argument)
+      read(argument, *) gaps(g - 2)
+    end do
+  else
+    gaps = [8.0_wp, 6.0_wp, 4.0_wp, 3.0_wp, 2.0_wp, 1.5_wp, 1.0_wp, 0.75_wp, 0.5_wp, 0.25_wp, 0.1_wp, 0.02_wp, &
+            0.004_wp]
+  end if
+  if (is_root()) then
+    print '(a)', '| D/dx | box (cells) | h/dx | h/a | F resolved (N) | F Brenner (N) | error | ' // &
+        'error of F(h) - F(widest) | total error, h_out = 1 cell | total error, h_out = 2 cells | steps | steady | wall s |'
+    print '(a)', '|---|---|---|---|---|---|---|---|---|---|---|---|---|'
+  end if
+  do g = 1, size(gaps)
+    case%gap_cells = gaps(g)
+    call run_squeeze(case, result)
+    if (g == 1) widest = result
+    if (is_root()) print row_format, '| ', case%diameter_cells, ' | ', 2 * case%width_cells, 'x', case%width_cells, &
+        '^2 | ', case%gap_cells, ' | ', result%gap_over_radius, ' | ', result%force, ' | ', result%reference, ' | ', &
+        100 * result%error, '% | ', 100 * increase_error(), '% | ', 100 * total_error(1.0_wp), '% | ', &
+        100 * total_error(2.0_wp), '% | ', result%steps, ' | ', &
+        trim(merge('yes', 'no ', result%steady)), ' | ', result%wall_seconds, ' |'
+  end do
+  call parallel_stop()
+
+contains
+
+  !> (F(h) - F(h_1)) / (F_B(h) - F_B(h_1)) - 1; 0 at the widest gap itself.
+  real(wp) function increase_error()
+    increase_error = 0
+    if (g > 1) increase_error = (result%force - widest%force) / (result%reference - widest%reference) - 1
+  end function increase_error
+
+  !> (F(h) + R_sub(h) 2U) / F_B(h) - 1 with the sub-grid model handing over at handover cells (equal
+  !> spheres: R_eff = a/2; the roughness far below the table's gaps).
+  real(wp) function total_error(handover)
+    real(wp), intent(in) :: handover
+    type(lubrication_model_t) :: model
+    type(lubrication_geometry_t) :: geometry
+    model = lubrication_model_t(dynamic_viscosity=squeeze_dynamic_viscosity, outer_gap=handover * result%cell, &
+                                roughness=1.0e-12_wp * result%cell)
+    geometry = lubrication_geometry_t(reduced_radius=0.5_wp * result%radius, radius1=result%radius, radius2=result%radius)
+    total_error = (result%force + lubrication_subgrid_resistance(model, geometry, case%gap_cells * result%cell) &
+                   * 2.0_wp * squeeze_speed) / result%reference - 1
+  end function total_error
+end program bench_immersed_squeeze
