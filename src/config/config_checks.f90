@@ -100,14 +100,14 @@ contains
         '1 (sub-steps split a fluid step; without a resolved fluid set &run dt itself)')
   end subroutine check_scene_combinations
 
-  !> The pair in the resolved fluid: point particles only (the immersed-boundary coupling of freely
-  !> moving particles is not available yet).
+  !> The pair in the resolved fluid: the immersed-boundary coupling ('resolved') imposes the bodies
+  !> with the immersed boundary: explicit diffusion, as for bodies in prescribed motion.
   subroutine check_resolved_pair_cross(cfg)
     type(agglo_config_t), intent(in) :: cfg
-    if (cfg%scene%particle_coupling == 'resolved') call input_error('scene', 'particle_coupling', &
-        '''resolved'' with fluid = ''resolved'' and particles = ''pair''', '''point'' (the immersed-boundary '// &
-        'coupling of freely moving particles is not available yet; ''point'' gives each particle its analytic '// &
-        'Stokes resistance in the flow at its centre)')
+    if (cfg%scene%particle_coupling == 'resolved' .and. cfg%fluid%viscous_scheme == 'crank_nicolson') &
+      call input_error('fluid', 'viscous_scheme', '''crank_nicolson'' with &scene particle_coupling = ''resolved''', &
+                       '''explicit'' (the Crank-Nicolson predictor with the immersed-boundary ghost rows is not '// &
+                       'available yet)')
   end subroutine check_resolved_pair_cross
 
   !> The pair in the resolved fluid's periodic box: body 2's minimum image must be the one next to body 1.
