@@ -83,11 +83,14 @@ contains
     if (cfg%scene%fluid == 'resolved' .and. cfg%scene%particles == 'pair') call check_resolved_pair_cross(cfg)
     if (cfg%scene%added_mass .and. .not. (cfg%scene%fluid == 'resolved' .and. cfg%scene%particles == 'pair')) &
       call input_error('scene', 'added_mass', '.true. with fluid = '''//trim(cfg%scene%fluid)//''' and particles = '''// &
-                       trim(cfg%scene%particles)//'''', '.false. (the added mass belongs to particle_coupling = ''point'' '// &
-                       'of the pair in the resolved fluid)')
+                       trim(cfg%scene%particles)//'''', '.false. (the added mass belongs to particle_coupling = '// &
+                       '''point'' or ''resolved'' of the pair in the resolved fluid)')
     if (cfg%pair%relative_to_fluid .and. cfg%scene%fluid /= 'resolved') call input_error('pair', &
         'relative_to_fluid', '.true. with &scene fluid = '''//trim(cfg%scene%fluid)//'''', '.false. (only a '// &
         'resolved fluid has a velocity at the particle centres)')
+    if (cfg%pair%hydrodynamics_from /= 'start' .and. cfg%scene%fluid == 'none') call input_error('pair', &
+        'hydrodynamics_from', ''''//trim(cfg%pair%hydrodynamics_from)//''' with &scene fluid = ''none''', &
+        '''start'' (without a fluid there are no hydrodynamic loads to switch on)')
     if (cfg%scene%particles == 'prescribed') call check_prescribed_cross(cfg)
     if (cfg%scene%fluid /= 'resolved' .and. cfg%scene%particles == 'none') call input_error('scene', &
         'particles', '''none'' with fluid = '''//trim(cfg%scene%fluid)//'''', &
