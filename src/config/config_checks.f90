@@ -91,6 +91,10 @@ contains
     if (cfg%pair%hydrodynamics_from /= 'start' .and. cfg%scene%fluid == 'none') call input_error('pair', &
         'hydrodynamics_from', ''''//trim(cfg%pair%hydrodynamics_from)//''' with &scene fluid = ''none''', &
         '''start'' (without a fluid there are no hydrodynamic loads to switch on)')
+    if (any(cfg%pair%gravity /= 0.0_wp) .and. .not. (cfg%scene%fluid == 'resolved' .and. cfg%scene%particles == 'pair' &
+        .and. cfg%scene%particle_coupling == 'resolved')) call input_error('pair', 'gravity', 'non-zero without '// &
+        '&scene fluid = ''resolved'', particles = ''pair'', particle_coupling = ''resolved''', '0, 0, 0 (gravity '// &
+        'acts on the particles resolved by the immersed boundary only)')
     if (cfg%scene%particles == 'prescribed') call check_prescribed_cross(cfg)
     if (cfg%scene%fluid /= 'resolved' .and. cfg%scene%particles == 'none') call input_error('scene', &
         'particles', '''none'' with fluid = '''//trim(cfg%scene%fluid)//'''', &

@@ -37,15 +37,19 @@ module config_pair
     !> When the particles start to feel the hydrodynamic loads: 'start' | 'first_contact' (after their
     !> first collision; the fluid still sees the moving bodies from the start)
     character(len=16) :: hydrodynamics_from = 'start'
+    !> m/s^2: gravity on the resolved particles (their net weight; the box's mean pressure gradient
+    !> balances it), &scene particle_coupling = 'resolved' only
+    real(wp) :: gravity(3) = 0.0_wp
   end type pair_config_t
 
   character(len=16) :: shape, orientation, approach, centre, integrator, end_rule, hydrodynamics_from
   real(wp) :: aspect_ratio, radius, density, axis1(3), angle1, axis2(3), angle2, approach_direction(3), &
-              gap, relative_speed, centre_position(3), box_length
+              gap, relative_speed, centre_position(3), box_length, gravity(3)
   logical :: mirror_first_collision, relative_to_fluid
   namelist /pair/ shape, aspect_ratio, radius, density, orientation, axis1, angle1, axis2, angle2, approach, &
                   approach_direction, gap, relative_speed, centre, centre_position, box_length, mirror_first_collision, &
-                  integrator, end_rule, relative_to_fluid, hydrodynamics_from
+                  integrator, end_rule, relative_to_fluid, hydrodynamics_from, &
+                  gravity
 
 contains
 
@@ -58,6 +62,7 @@ contains
     centre_position = cfg%centre_position; box_length = cfg%box_length
     mirror_first_collision = cfg%mirror_first_collision; integrator = cfg%integrator; end_rule = cfg%end_rule
     relative_to_fluid = cfg%relative_to_fluid; hydrodynamics_from = cfg%hydrodynamics_from
+    gravity = cfg%gravity
   end subroutine to_namelist
 
   subroutine from_namelist(cfg)
@@ -69,6 +74,7 @@ contains
     cfg%centre_position = centre_position; cfg%box_length = box_length
     cfg%mirror_first_collision = mirror_first_collision; cfg%integrator = integrator; cfg%end_rule = end_rule
     cfg%relative_to_fluid = relative_to_fluid; cfg%hydrodynamics_from = hydrodynamics_from
+    cfg%gravity = gravity
   end subroutine from_namelist
 
   subroutine read_pair_group(deck, cfg)

@@ -23,6 +23,12 @@
 !> to the particle step is m dU/dt - F_other (I dOmega/dt - T_other), so that the explicit step,
 !> which divides by m (I), moves the body with that acceleration (as point_particle_coupling does).
 !>
+!> Gravity (&pair gravity, g): each body feels its net weight W = (rho_p - rho_f) V g as a
+!> constant external force (added to the loads), and the whole box (fluid and bodies' nodes) the
+!> uniform drive -sum W / L^3, the mean pressure gradient beyond the hydrostatic one that keeps the
+!> box's total momentum from growing (a settling suspension in a periodic box; the drive's share on
+!> each body, -V sum W / L^3, arrives through the momentum-balance load).
+!>
 !> State across fluid steps: the velocities imposed in the last step (for A^n) and the loads;
 !> both go into the checkpoint (resolved_write_checkpoint), the geometry is recomputed from the
 !> particle state every step.
@@ -56,6 +62,7 @@ module resolved_hydrodynamics
     real(wp) :: dt = 0                                 !< s, the last fluid step (0 before the first)
     real(wp), allocatable :: force(:, :), torque(:, :)          !< (3, n) N, N m: F^n, T^n of the last step (lab)
     real(wp), allocatable :: added_mass(:, :)                   !< (3, n) kg, body frame
+    real(wp), allocatable :: weight(:, :)                       !< (3, n) N, net weight (rho_p - rho_f) V g (lab)
     real(wp), allocatable :: added_inertia(:, :)                !< (3, n) kg m^2, body frame
     real(wp), allocatable :: imposed_velocity(:, :), imposed_angular_velocity(:, :)   !< (3, n) lab, last step
     real(wp), allocatable :: acceleration(:, :), angular_acceleration(:, :)           !< (3, n) lab, A^n, Alpha^n
@@ -72,9 +79,10 @@ contains
   !> The provider for the system's bodies in the solver's fluid (collective: classifies the grid).
   !> settings: the imposition (&scene ibm_coupling, &bodies ghost_tolerance, max_sweeps);
   !> load_method, surface_level: as immersed_scene_create (&bodies load_method, mesh_level);
-  !> stabilise: the added-mass stabilisation; restart: the fluid already holds the bodies.
+  !> stabilise: the added-mass stabilisation; restart: the fluid already holds the bodies;
+  !> gravity: m/s^2 (module header).
   subroutine resolved_hydrodynamics_create(provider, solver, system, settings, load_method, surface_level, &
-                                           stabilise, restart)
+                                           stabilise, restart, gravity)
     type(resolved_hydrodynamics_t), intent(out) :: provider
     type(fluid_solver_t), intent(inout) :: solver
     type(particle_system_t), intent(in) :: system
@@ -82,12 +90,13 @@ contains
     character(len=*), intent(in) :: load_method
     integer, intent(in) :: surface_level
     logical, intent(in) :: stabilise, restart
+    real(wp), intent(in) :: gravity(3)
     type(prescribed_motion_t), allocatable :: motion(:)
     real(wp) :: k(2), fluid_mass, ratio_translation, ratio_rotation
     integer :: i
     provider%box = [solver%grid%lx, solver%grid%ly, solver%grid%lz]
     allocate(motion(system%n))
-    allocate(provider%added_mass(3, system%n), provider%added_inertia(3, system%n))
+    allocate(provider%added_mass(3, system%n), provider%added_inertia(3, system%n), provider%weight(3, system%n))
     ratio_translation = 0
     ratio_rotation = 0
     do i = 1, system%n
@@ -97,6 +106,7 @@ contains
       motion(i)%centre = system%bodies(i)%position
       motion(i)%orientation = system%bodies(i)%quaternion
       fluid_mass = solver%density * system%shapes(i)%volume
+      provider%weight(:, i) = (system%bodies(i)%mass - fluid_mass) * gravity
       k = spheroid_added_mass_coefficients(system%shapes(i)%a, system%shapes(i)%b)
       provider%added_mass(:, i) = fluid_mass * [k(1), k(2), k(2)]
       provider%added_inertia(:, i) = [0.0_wp, 1.0_wp, 1.0_wp] * &
@@ -104,8 +114,9 @@ contains
       ratio_translation = max(ratio_translation, maxval(provider%added_mass(:, i)) / system%bodies(i)%mass)
       ratio_rotation = max(ratio_rotation, maxval(provider%added_inertia(:, i) / system%bodies(i)%inertia_body))
     end do
-    call immersed_scene_create(provider%scene, solver, motion, settings, [0.0_wp, 0.0_wp, 0.0_wp], load_method, &
-                               surface_level)
+    call immersed_scene_create(provider%scene, solver, motion, settings, &
+                               -sum(provider%weight, dim=2) / (provider%box(1) * provider%box(2) * provider%box(3)), &
+                               load_method, surface_level)
     allocate(provider%force(3, system%n), provider%torque(3, system%n))
     provider%force = 0
     provider%torque = 0
@@ -234,7 +245,7 @@ contains
     if (.not. (theta >= 0.0_wp .and. theta <= 1.0_wp)) call fatal('resolved particles: loads at theta outside [0, 1]')
     do i = 1, system%n
       if (.not. self%stabilise) then
-        loads%force(:, i) = self%force(:, i)
+        loads%force(:, i) = self%force(:, i) + self%weight(:, i)
         loads%torque(:, i) = self%torque(:, i)
         cycle
       end if
@@ -242,10 +253,10 @@ contains
       associate (body => system%bodies(i), other_force => system%dlvo_loads%force(:, i), &
                  other_torque => system%dlvo_loads%torque(:, i))
         ! Body frame: (m + M_a) a = F + M_a A + F_other; the load is m a - F_other.
-        total = matmul(self%force(:, i) + other_force, rotation)
+        total = matmul(self%force(:, i) + self%weight(:, i) + other_force, rotation)
         estimate = matmul(self%acceleration(:, i), rotation)
         rate = (total + self%added_mass(:, i) * estimate) / (body%mass + self%added_mass(:, i))
-        loads%force(:, i) = body%mass * matmul(rotation, rate) - other_force
+        loads%force(:, i) = body%mass * matmul(rotation, rate) - other_force   ! the weight included
         total = matmul(self%torque(:, i) + other_torque, rotation)
         estimate = matmul(self%angular_acceleration(:, i), rotation)
         rate = (total + self%added_inertia(:, i) * estimate) / (body%inertia_body + self%added_inertia(:, i))

@@ -274,7 +274,7 @@ contains
       allocate(resolved)
       call resolved_hydrodynamics_create(resolved, solver, system, settings, cfg%bodies%load_method, &
                                          merge(cfg%bodies%mesh_level, -1, cfg%bodies%load_method == 'surface'), &
-                                         cfg%scene%added_mass, cfg%run%restart)
+                                         cfg%scene%added_mass, cfg%run%restart, cfg%pair%gravity)
       call move_alloc(resolved, hydrodynamics)
     case default
       call fatal('resolved pair scene: &scene particle_coupling = '''//trim(cfg%scene%particle_coupling)// &
