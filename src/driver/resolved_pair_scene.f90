@@ -1,6 +1,7 @@
 !> The particle pair in the resolved fluid: &scene fluid = 'resolved', particles = 'pair'. One
 !> driver for every &scene particle_coupling; what changes with it is the hydrodynamic-load
-!> provider (module pair_hydrodynamics: 'point' now, the immersed boundary later).
+!> provider (module pair_hydrodynamics: 'point', module point_hydrodynamics; 'resolved', the immersed
+!> boundary, module resolved_hydrodynamics).
 !>
 !> One step (docs/design.md, "The pair in the resolved fluid"): the fluid advances by the step its
 !> own limits allow (&run dt_mode: CFL / diffusion limit, or &run dt), the provider sampling or
@@ -15,11 +16,15 @@
 !> Start: the fluid as in the resolved scene (&fluid init, or the newest checkpoint), the pair as
 !> in the pair scenes (&pair; centre = 'random' draws in the fluid's box; with &pair
 !> relative_to_fluid the start velocities lie on top of the fluid's motion at each centre).
-!> Outputs: the pair scenes' particles.h5 and summary.json (fluid 'resolved_point'), whose samples
+!> &pair hydrodynamics_from = 'first_contact': the sub-steps feel no hydrodynamic load before the
+!> pair's first collision (the fluid step still sees the bodies).
+!> Outputs: the pair scenes' particles.h5 and summary.json (fluid 'resolved_point' or
+!> 'resolved_resolved'), whose samples
 !> carry the hydrodynamic force and torque (force_hydrodynamic, torque_hydrodynamic), and the
 !> resolved scene's fluid_statistics.dat, fields and flow statistics. Checkpoints (every &output
 !> checkpoint_interval fluid steps and at the end): one transaction with the groups fluid, forcing,
-!> particles and pair_scene, so &run restart continues bit for bit.
+!> particles, pair_scene and the provider's own (resolved_hydrodynamics), so &run restart continues
+!> bit for bit.
 module resolved_pair_scene
   use agglo_kinds, only: wp, i8
   use agglo_config, only: agglo_config_t
