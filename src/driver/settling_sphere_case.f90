@@ -11,6 +11,7 @@
 !> over rho_f L^3 U_s.
 module settling_sphere_case
   use agglo_kinds, only: wp
+  use error_handling, only: fatal
   use physical_constants, only: pi
   use parallel_env, only: global_sum
   use wall_clock, only: wall_time
@@ -75,6 +76,8 @@ contains
     integer :: step, substep, n, nz
 
     t0 = wall_time()
+    if (.not. abs(case%density_ratio - 1.0_wp) > 1.0e-3_wp) &
+      call fatal('settling_sphere_case: density_ratio 1 has no net weight to settle under')
     n = case%cells
     grid_cfg = grid_config_t(nx=n, ny=n, nz=n, length_x=box, length_y=box, length_z=box)
     fluid_cfg%density = density
