@@ -108,9 +108,15 @@ contains
   end subroutine check_scene_combinations
 
   !> The pair in the resolved fluid: the immersed-boundary coupling ('resolved') imposes the bodies
-  !> with the immersed boundary: explicit diffusion, as for bodies in prescribed motion.
+  !> with the immersed boundary: explicit diffusion, as for bodies in prescribed motion; particles at
+  !> least half as dense as the fluid (below, the added-mass stabilisation of a disk's rotation was
+  !> measured to ring with a growing amplitude, docs/validation.md "Free particles").
   subroutine check_resolved_pair_cross(cfg)
     type(agglo_config_t), intent(in) :: cfg
+    if (cfg%scene%particle_coupling == 'resolved' .and. cfg%pair%density < 0.5_wp * cfg%fluid%density) &
+      call input_error('pair', 'density', real_text(cfg%pair%density), '>= 0.5 x &fluid density = '// &
+                       real_text(0.5_wp * cfg%fluid%density)//' with &scene particle_coupling = ''resolved'' (lighter '// &
+                       'particles are not stable with the lagged loads, docs/validation.md "Free particles")')
     if (cfg%scene%particle_coupling == 'resolved' .and. cfg%fluid%viscous_scheme == 'crank_nicolson') &
       call input_error('fluid', 'viscous_scheme', '''crank_nicolson'' with &scene particle_coupling = ''resolved''', &
                        '''explicit'' (the Crank-Nicolson predictor with the immersed-boundary ghost rows is not '// &

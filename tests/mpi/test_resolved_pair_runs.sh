@@ -10,6 +10,7 @@
 #  - restart: n fluid steps, then &run restart to 2n, equals 2n steps in one go bit for bit (the
 #    newest checkpoint with its fluid, particles, pair_scene and resolved_hydrodynamics groups, and
 #    particles.h5; h5diff without tolerance), on 1 and on 2 ranks; 1 and 2 ranks agree to 1e-9.
+#  - a particle less than half as dense as the fluid is refused by the deck checks, naming &pair density;
 #  - &pair hydrodynamics_from = 'first_contact' in the 'stokes' scene: before the first collision
 #    the pair feels no drag, so the first collision is the fluid-free scene's (to 1e-12 relative).
 # Prints PASS/FAIL lines; works in a temporary directory.
@@ -73,6 +74,15 @@ if mpirun -np 1 "$AGGLO" disk.nml --set "output.directory='calcite_on'" > calcit
   fi
 else
   echo "FAIL resolved_pair_runs/face_on_disk_calcite_stable: the run failed: $(tail -n 2 calcite_on.out | head -c 300)"
+fi
+
+if mpirun -np 1 "$AGGLO" disk.nml --set "pair.density=400.0" --set "output.directory='too_light'" > too_light.out 2>&1; then
+  echo "FAIL resolved_pair_runs/too_light_refused: the run was accepted"
+elif grep -q "&pair density = 4.00000E+02 is not allowed; allowed: >= 0.5 x &fluid density" too_light.out \
+     && [ ! -d too_light ]; then
+  echo "PASS resolved_pair_runs/too_light_refused  ($(grep -o 'allowed: >= 0.5 x &fluid density = [^ ]*' too_light.out))"
+else
+  echo "FAIL resolved_pair_runs/too_light_refused: $(grep -m1 'agglo: error' too_light.out | cut -c1-200)"
 fi
 
 # --- restart and ranks: a sphere pair in a forced box ------------------------------------------------
