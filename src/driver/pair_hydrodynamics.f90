@@ -35,6 +35,8 @@ module pair_hydrodynamics
     !> default; the resolved provider keeps its lagged loads and imposed velocities).
     procedure :: write_checkpoint => no_checkpoint_write
     procedure :: read_checkpoint => no_checkpoint_read
+    !> A line for the progress log about the last fluid step's coupling ('' when there is nothing).
+    procedure :: progress_text => no_progress_text
   end type pair_hydrodynamics_t
 
   abstract interface
@@ -69,6 +71,12 @@ contains
     class(pair_hydrodynamics_t), intent(in) :: self
     type(checkpoint_t), intent(in) :: transaction
   end subroutine no_checkpoint_write
+
+  function no_progress_text(self) result(text)
+    class(pair_hydrodynamics_t), intent(in) :: self
+    character(len=:), allocatable :: text
+    text = ''
+  end function no_progress_text
 
   subroutine no_checkpoint_read(self, restart)
     class(pair_hydrodynamics_t), intent(inout) :: self

@@ -36,7 +36,7 @@ module resolved_hydrodynamics
   use agglo_kinds, only: wp
   use error_handling, only: fatal
   use logger, only: log_line
-  use text_format, only: real_text
+  use text_format, only: real_text, int_text
   use checkpoint_files, only: checkpoint_t
   use hdf5_io, only: h5_write_array, h5_read_array
   use fluid_solver, only: fluid_solver_t
@@ -72,6 +72,7 @@ module resolved_hydrodynamics
     procedure :: loads => resolved_loads
     procedure :: write_checkpoint => resolved_write_checkpoint
     procedure :: read_checkpoint => resolved_read_checkpoint
+    procedure :: progress_text => resolved_progress_text
   end type resolved_hydrodynamics_t
 
 contains
@@ -264,6 +265,20 @@ contains
       end associate
     end do
   end subroutine resolved_loads
+
+  !> The last step's ghost-row sweeps (near contact the two bodies' rows couple and need more) and
+  !> the bodies' force magnitudes.
+  function resolved_progress_text(self) result(text)
+    class(resolved_hydrodynamics_t), intent(in) :: self
+    character(len=:), allocatable :: text
+    integer :: i
+    text = '  immersed boundary: sweeps '//int_text(self%scene%predicted%sweeps)//', residual '// &
+           real_text(self%scene%predicted%residual)//', |F| ='
+    do i = 1, size(self%force, 2)
+      text = text//' '//real_text(norm2(self%force(:, i)))
+    end do
+    text = text//' N'
+  end function resolved_progress_text
 
   !> The provider's state across fluid steps (group resolved_hydrodynamics of the transaction).
   subroutine resolved_write_checkpoint(self, transaction)

@@ -186,6 +186,7 @@ contains
         call log_line('  pair: gap = '//scientific_text(system%pairs(the_pair)%contact%gap)//' m  v_n = '// &
             scientific_text(normal_approach_speed(system, the_pair))//' m/s  collisions = '// &
             int_text(summary%collisions))
+        if (len(hydrodynamics%progress_text()) > 0) call log_line(hydrodynamics%progress_text())
       end if
       if (finished) exit
       if (solver%time >= next_field_time * (1.0_wp - 1.0e-12_wp) .and. solver%time < cfg%run%end_time) then

@@ -8,8 +8,10 @@
 #    stabilisation the speed stays below the start speed (stable). At the paper's ratio 2.72 the
 #    stabilised run decays without a sign change.
 #  - restart: n fluid steps, then &run restart to 2n, equals 2n steps in one go bit for bit (the
-#    newest checkpoint with its fluid, particles, pair_scene and resolved_hydrodynamics groups, and
-#    particles.h5; h5diff without tolerance), on 1 and on 2 ranks; 1 and 2 ranks agree to 1e-9.
+#    newest checkpoint with its fluid, forcing, particles, pair_scene and resolved_hydrodynamics
+#    groups, and particles.h5; h5diff without tolerance), on 1 and on 2 ranks, for a sphere pair
+#    0.1 um apart: in DLVO range (closest points warm-started) at the restart, colliding after it;
+#    1 and 2 ranks agree to 1e-9.
 #  - a particle less than half as dense as the fluid is refused by the deck checks, naming &pair density;
 #  - &pair hydrodynamics_from = 'first_contact' in the 'stokes' scene: before the first collision
 #    the pair feels no drag, so the first collision is the fluid-free scene's (to 1e-12 relative).
@@ -95,7 +97,8 @@ pair_deck() { # directory, max_steps, restart
 &grid nx = 32, ny = 32, nz = 32, length_x = 0.25e-3, length_y = 0.25e-3, length_z = 0.25e-3 /
 &fluid density = 997.0, viscosity = 1.0e-6, init = 'random', init_amplitude = 0.002, init_peak_wavenumber = 2.0 /
 &forcing time_scale = 0.01, target_dissipation = 1.0e-5, statistics_interval = 0 /
-&pair shape = 'sphere', radius = 40.0e-6, density = 2710.0, gap = 2.0e-6, relative_speed = 4.2e-3,
+&bodies max_sweeps = 1000 /
+&pair shape = 'sphere', radius = 40.0e-6, density = 2710.0, gap = 0.1e-6, relative_speed = 4.2e-3,
       approach = 'given', approach_direction = 1.0, 0.2, 0.6, centre = 'given',
       centre_position = 0.125e-3, 0.125e-3, 0.126e-3, relative_to_fluid = .true. /
 &dlvo hamaker = 22.3e-21, debye_kappa = 328947368.0, surface_charge_density = 3.7e-4, vdw_cutoff = 5.0e-9 /
@@ -105,17 +108,18 @@ NML
 }
 newest() { ls "$1"/checkpoints/checkpoint_*.h5 | sort | tail -n 1; }
 for ranks in 1 2; do
-  pair_deck whole$ranks 12 .false. > whole$ranks.nml
-  pair_deck split$ranks 6 .false. > split${ranks}a.nml
-  pair_deck split$ranks 12 .true. > split${ranks}b.nml
+  pair_deck whole$ranks 16 .false. > whole$ranks.nml
+  pair_deck split$ranks 8 .false. > split${ranks}a.nml
+  pair_deck split$ranks 16 .true. > split${ranks}b.nml
   if mpirun -np $ranks "$AGGLO" whole$ranks.nml > whole$ranks.out 2>&1 \
      && mpirun -np $ranks "$AGGLO" split${ranks}a.nml > split${ranks}a.out 2>&1 \
      && mpirun -np $ranks "$AGGLO" split${ranks}b.nml > split${ranks}b.out 2>&1; then
     if [ "$(basename "$(newest whole$ranks)")" = "$(basename "$(newest split$ranks)")" ] \
        && h5diff -q "$(newest whole$ranks)" "$(newest split$ranks)" > diff$ranks.txt 2>&1 \
        && h5diff -q whole$ranks/particles.h5 split$ranks/particles.h5 >> diff$ranks.txt 2>&1 \
-       && grep -q 'continuing from' split${ranks}b.out; then
-      echo "PASS resolved_pair_runs/restart_bit_for_bit_${ranks}_ranks  (6 + restart + 6 = 12 fluid steps; checkpoint and particles.h5)"
+       && grep -q 'continuing from' split${ranks}b.out \
+       && python3 -c "import json, sys; sys.exit(0 if json.load(open('whole$ranks/summary.json'))['collisions'] > 0 else 1)"; then
+      echo "PASS resolved_pair_runs/restart_bit_for_bit_${ranks}_ranks  (8 + restart + 8 = 16 fluid steps, in DLVO range at the restart, collision after it; checkpoint and particles.h5)"
     else
       echo "FAIL resolved_pair_runs/restart_bit_for_bit_${ranks}_ranks: $(head -c 300 diff$ranks.txt)"
     fi
