@@ -84,11 +84,18 @@ contains
     if (cfg%scene%fluid == 'resolved' .and. cfg%scene%particles == 'pair') call check_resolved_pair_cross(cfg)
     if (cfg%scene%added_mass .and. .not. (cfg%scene%fluid == 'resolved' .and. cfg%scene%particles == 'pair')) &
       call input_error('scene', 'added_mass', '.true. with fluid = '''//trim(cfg%scene%fluid)//''' and particles = '''// &
-                       trim(cfg%scene%particles)//'''', '.false. (the added mass belongs to particle_coupling = ''point'' '// &
-                       'of the pair in the resolved fluid)')
+                       trim(cfg%scene%particles)//'''', '.false. (the added mass belongs to particle_coupling = '// &
+                       '''point'' or ''resolved'' of the pair in the resolved fluid)')
     if (cfg%pair%relative_to_fluid .and. cfg%scene%fluid /= 'resolved') call input_error('pair', &
         'relative_to_fluid', '.true. with &scene fluid = '''//trim(cfg%scene%fluid)//'''', '.false. (only a '// &
         'resolved fluid has a velocity at the particle centres)')
+    if (cfg%pair%hydrodynamics_from /= 'start' .and. cfg%scene%fluid == 'none') call input_error('pair', &
+        'hydrodynamics_from', ''''//trim(cfg%pair%hydrodynamics_from)//''' with &scene fluid = ''none''', &
+        '''start'' (without a fluid there are no hydrodynamic loads to switch on)')
+    if (any(cfg%pair%gravity /= 0.0_wp) .and. .not. (cfg%scene%fluid == 'resolved' .and. cfg%scene%particles == 'pair' &
+        .and. cfg%scene%particle_coupling == 'resolved')) call input_error('pair', 'gravity', 'non-zero without '// &
+        '&scene fluid = ''resolved'', particles = ''pair'', particle_coupling = ''resolved''', '0, 0, 0 (gravity '// &
+        'acts on the particles resolved by the immersed boundary only)')
     if (cfg%scene%particles == 'prescribed') call check_prescribed_cross(cfg)
     if (cfg%scene%fluid /= 'resolved' .and. cfg%scene%particles == 'none') call input_error('scene', &
         'particles', '''none'' with fluid = '''//trim(cfg%scene%fluid)//'''', &
@@ -101,14 +108,20 @@ contains
         '1 (sub-steps split a fluid step; without a resolved fluid set &run dt itself)')
   end subroutine check_scene_combinations
 
-  !> The pair in the resolved fluid: point particles only (the immersed-boundary coupling of freely
-  !> moving particles is not available yet).
+  !> The pair in the resolved fluid: the immersed-boundary coupling ('resolved') imposes the bodies
+  !> with the immersed boundary: explicit diffusion, as for bodies in prescribed motion; particles at
+  !> least half as dense as the fluid (below, the added-mass stabilisation of a disk's rotation was
+  !> measured to ring with a growing amplitude, docs/validation.md "Free particles").
   subroutine check_resolved_pair_cross(cfg)
     type(agglo_config_t), intent(in) :: cfg
-    if (cfg%scene%particle_coupling == 'resolved') call input_error('scene', 'particle_coupling', &
-        '''resolved'' with fluid = ''resolved'' and particles = ''pair''', '''point'' (the immersed-boundary '// &
-        'coupling of freely moving particles is not available yet; ''point'' gives each particle its analytic '// &
-        'Stokes resistance in the flow at its centre)')
+    if (cfg%scene%particle_coupling == 'resolved' .and. cfg%pair%density < 0.5_wp * cfg%fluid%density) &
+      call input_error('pair', 'density', real_text(cfg%pair%density), '>= 0.5 x &fluid density = '// &
+                       real_text(0.5_wp * cfg%fluid%density)//' with &scene particle_coupling = ''resolved'' (lighter '// &
+                       'particles are not stable with the lagged loads, docs/validation.md "Free particles")')
+    if (cfg%scene%particle_coupling == 'resolved' .and. cfg%fluid%viscous_scheme == 'crank_nicolson') &
+      call input_error('fluid', 'viscous_scheme', '''crank_nicolson'' with &scene particle_coupling = ''resolved''', &
+                       '''explicit'' (the Crank-Nicolson predictor with the immersed-boundary ghost rows is not '// &
+                       'available yet)')
   end subroutine check_resolved_pair_cross
 
   !> The pair in the resolved fluid's periodic box: body 2's minimum image must be the one next to body 1.

@@ -34,15 +34,22 @@ module config_pair
     !> Resolved fluid: the start velocities on top of the fluid's at each centre (and the angular
     !> velocity its local (1/2) curl u); centre = 'random' draws in the fluid's box (box_length unused)
     logical :: relative_to_fluid = .false.
+    !> When the particles start to feel the hydrodynamic loads: 'start' | 'first_contact' (after their
+    !> first collision; the fluid still sees the moving bodies from the start)
+    character(len=16) :: hydrodynamics_from = 'start'
+    !> m/s^2: gravity on the resolved particles (their net weight; the box's mean pressure gradient
+    !> balances it), &scene particle_coupling = 'resolved' only
+    real(wp) :: gravity(3) = 0.0_wp
   end type pair_config_t
 
-  character(len=16) :: shape, orientation, approach, centre, integrator, end_rule
+  character(len=16) :: shape, orientation, approach, centre, integrator, end_rule, hydrodynamics_from
   real(wp) :: aspect_ratio, radius, density, axis1(3), angle1, axis2(3), angle2, approach_direction(3), &
-              gap, relative_speed, centre_position(3), box_length
+              gap, relative_speed, centre_position(3), box_length, gravity(3)
   logical :: mirror_first_collision, relative_to_fluid
   namelist /pair/ shape, aspect_ratio, radius, density, orientation, axis1, angle1, axis2, angle2, approach, &
                   approach_direction, gap, relative_speed, centre, centre_position, box_length, mirror_first_collision, &
-                  integrator, end_rule, relative_to_fluid
+                  integrator, end_rule, relative_to_fluid, hydrodynamics_from, &
+                  gravity
 
 contains
 
@@ -54,7 +61,8 @@ contains
     gap = cfg%gap; relative_speed = cfg%relative_speed; centre = cfg%centre
     centre_position = cfg%centre_position; box_length = cfg%box_length
     mirror_first_collision = cfg%mirror_first_collision; integrator = cfg%integrator; end_rule = cfg%end_rule
-    relative_to_fluid = cfg%relative_to_fluid
+    relative_to_fluid = cfg%relative_to_fluid; hydrodynamics_from = cfg%hydrodynamics_from
+    gravity = cfg%gravity
   end subroutine to_namelist
 
   subroutine from_namelist(cfg)
@@ -65,7 +73,8 @@ contains
     cfg%gap = gap; cfg%relative_speed = relative_speed; cfg%centre = centre
     cfg%centre_position = centre_position; cfg%box_length = box_length
     cfg%mirror_first_collision = mirror_first_collision; cfg%integrator = integrator; cfg%end_rule = end_rule
-    cfg%relative_to_fluid = relative_to_fluid
+    cfg%relative_to_fluid = relative_to_fluid; cfg%hydrodynamics_from = hydrodynamics_from
+    cfg%gravity = gravity
   end subroutine from_namelist
 
   subroutine read_pair_group(deck, cfg)
@@ -108,6 +117,8 @@ contains
     call require_positive('pair', 'box_length', cfg%box_length)
     call require_option('pair', 'integrator', cfg%integrator, [character(len=8) :: 'euler', 'verlet'])
     call require_option('pair', 'end_rule', cfg%end_rule, [character(len=8) :: 'settled', 'paper'])
+    call require_option('pair', 'hydrodynamics_from', cfg%hydrodynamics_from, &
+                        [character(len=13) :: 'start', 'first_contact'])
   end subroutine check_pair_group
 
   subroutine write_pair_group(unit, cfg)

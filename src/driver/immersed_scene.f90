@@ -140,13 +140,22 @@ contains
   !> nodes of the new placement only: the imposition replaces the bodies' nodes, so the force there
   !> would only add rho f over the body's nodes to its load (the drive, a mean pressure gradient,
   !> does act on the body and stays everywhere).
-  subroutine immersed_step(scene, solver, dt, fluid_force_u, fluid_force_v, fluid_force_w)
+  !> bodies, velocity, angular_velocity: the bodies at t^{n+1} as the caller places them (free
+  !> particles, module resolved_hydrodynamics), instead of the prescribed motion; reclassified.
+  subroutine immersed_step(scene, solver, dt, fluid_force_u, fluid_force_v, fluid_force_w, bodies, velocity, &
+                           angular_velocity)
     type(immersed_scene_t), intent(inout), target :: scene
     type(fluid_solver_t), intent(inout) :: solver
     real(wp), intent(in) :: dt
     real(wp), intent(in), optional :: fluid_force_u(0:, 0:, 0:), fluid_force_v(0:, 0:, 0:), fluid_force_w(0:, 0:, 0:)
+    type(immersed_body_t), intent(in), optional :: bodies(:)
+    real(wp), intent(in), optional :: velocity(:, :), angular_velocity(:, :)
     call timer_tic(scene%timer)
-    call place_bodies(scene, solver, solver%time + dt, classify=scene%moving)
+    if (present(bodies)) then
+      call ibm_set_bodies(scene%ibm, solver%grid, bodies, velocity, angular_velocity, classify=.true.)
+    else
+      call place_bodies(scene, solver, solver%time + dt, classify=scene%moving)
+    end if
     if (present(fluid_force_u)) then
       associate (drive => scene%driving_force / solver%density, nodes => scene%ibm%geometry%component)
         scene%force_u = drive(1) + merge(fluid_force_u, 0.0_wp, nodes(1)%status == node_fluid)
@@ -158,7 +167,7 @@ contains
     call timer_toc(scene%timer)
     if (solver%crank_nicolson) then
       ! The body rows are part of the predictor's system (the predictor's time counts as the fluid's).
-      if (scene%moving) call immersed_predictor_reclassified(scene%predictor)
+      if (scene%moving .or. present(bodies)) call immersed_predictor_reclassified(scene%predictor)
       scene%predictor%ibm => scene%ibm
       if (scene%guess_from_velocity) call immersed_predictor_first_guess(scene%predictor, solver%grid, solver%u, &
                                                                          solver%v, solver%w)

@@ -110,6 +110,9 @@ contains
       else
         call record_interaction(cfg, system, loop, output, summary)
         if (stokes) call stokes_loads_of(resistance, system, hydrodynamic)
+        ! &pair hydrodynamics_from = 'first_contact': no hydrodynamic loads before the first collision.
+        if (cfg%pair%hydrodynamics_from == 'first_contact' .and. summary%collisions == 0) &
+          hydrodynamic = particle_loads_zero(system%n)
         if (loop%step > 0) finished = run_finished(cfg, rules, system, summary, loop%time, loop%step, loop%end_time)
         if (sampled(cfg, loop%step) .or. finished) &
           call write_sample(output, loop%time, system, hydrodynamic)

@@ -39,7 +39,7 @@ contains
   !> The fluid at the current centres, frozen until the first fluid step.
   subroutine point_prepare(self, solver, system)
     class(point_hydrodynamics_t), intent(inout) :: self
-    type(fluid_solver_t), intent(in) :: solver
+    type(fluid_solver_t), intent(inout) :: solver
     type(particle_system_t), intent(in) :: system
     call point_coupling_sample(self%coupling, solver%grid, solver%u, solver%v, solver%w, system%bodies, sample_start)
   end subroutine point_prepare

@@ -1,6 +1,7 @@
 !> The particle pair in the resolved fluid: &scene fluid = 'resolved', particles = 'pair'. One
 !> driver for every &scene particle_coupling; what changes with it is the hydrodynamic-load
-!> provider (module pair_hydrodynamics: 'point' now, the immersed boundary later).
+!> provider (module pair_hydrodynamics: 'point', module point_hydrodynamics; 'resolved', the immersed
+!> boundary, module resolved_hydrodynamics).
 !>
 !> One step (docs/design.md, "The pair in the resolved fluid"): the fluid advances by the step its
 !> own limits allow (&run dt_mode: CFL / diffusion limit, or &run dt), the provider sampling or
@@ -15,11 +16,15 @@
 !> Start: the fluid as in the resolved scene (&fluid init, or the newest checkpoint), the pair as
 !> in the pair scenes (&pair; centre = 'random' draws in the fluid's box; with &pair
 !> relative_to_fluid the start velocities lie on top of the fluid's motion at each centre).
-!> Outputs: the pair scenes' particles.h5 and summary.json (fluid 'resolved_point'), whose samples
+!> &pair hydrodynamics_from = 'first_contact': the sub-steps feel no hydrodynamic load before the
+!> pair's first collision (the fluid step still sees the bodies).
+!> Outputs: the pair scenes' particles.h5 and summary.json (fluid 'resolved_point' or
+!> 'resolved_resolved'), whose samples
 !> carry the hydrodynamic force and torque (force_hydrodynamic, torque_hydrodynamic), and the
 !> resolved scene's fluid_statistics.dat, fields and flow statistics. Checkpoints (every &output
 !> checkpoint_interval fluid steps and at the end): one transaction with the groups fluid, forcing,
-!> particles and pair_scene, so &run restart continues bit for bit.
+!> particles, pair_scene and the provider's own (resolved_hydrodynamics), so &run restart continues
+!> bit for bit.
 module resolved_pair_scene
   use agglo_kinds, only: wp, i8
   use agglo_config, only: agglo_config_t
@@ -53,6 +58,8 @@ module resolved_pair_scene
                         open_particle_output
   use pair_hydrodynamics, only: pair_hydrodynamics_t
   use point_hydrodynamics, only: point_hydrodynamics_t, point_hydrodynamics_create
+  use resolved_hydrodynamics, only: resolved_hydrodynamics_t, resolved_hydrodynamics_create
+  use immersed_boundary, only: ibm_settings_t
   use point_particle_coupling, only: local_rotation, sample_velocity
   implicit none
   private
@@ -99,6 +106,7 @@ contains
     hydrodynamic = particle_loads_zero(system%n)
     if (cfg%run%restart) then
       call read_pair_scene_group(restart, cfg, system, loop, summary, hydrodynamic, output)
+      call hydrodynamics%read_checkpoint(restart)
       call checkpoint_close(restart)   ! every component has its state back
       if (loop%step > 0 .and. abs(loop%time - solver%time) > 1.0e-12_wp * max(solver%time, tiny(1.0_wp))) &
         call fatal('resolved pair scene: the checkpoint''s particle time '//real_text(loop%time)// &
@@ -129,7 +137,7 @@ contains
       call statistics_write(solver%step, solver%time, 0.0_wp, stats)
       call output_fields()
       call record_interaction(cfg, system, loop, output, summary)
-      call hydrodynamics%loads(system, 0.0_wp, hydrodynamic)
+      call felt_loads(0.0_wp)
       call write_sample(output, loop%time, system, hydrodynamic)
       finished = run_finished(cfg, rules, system, summary, loop%time, solver%step, loop%end_time)
     end if
@@ -156,7 +164,7 @@ contains
                                                                      forcing_driver_power_input(forcing, solver))
 
       call timer_tic(timer_particles)
-      call hydrodynamics%loads(system, 0.0_wp, hydrodynamic)
+      call felt_loads(0.0_wp)
       do substep = 1, substeps
         call particle_system_step(system, dt_particle, hydrodynamic)
         loop%step = loop%step + 1
@@ -165,7 +173,7 @@ contains
         if (substep == substeps) loop%time = solver%time
         call record_interaction(cfg, system, loop, output, summary)
         ! The loads of the new state: the next sub-step's, and the sample's.
-        call hydrodynamics%loads(system, real(substep, wp) / substeps, hydrodynamic)
+        call felt_loads(real(substep, wp) / substeps)
         if (sampled(cfg, loop%step)) call write_sample(output, loop%time, system, hydrodynamic)
       end do
       call timer_toc(timer_particles)
@@ -179,6 +187,7 @@ contains
         call log_line('  pair: gap = '//scientific_text(system%pairs(the_pair)%contact%gap)//' m  v_n = '// &
             scientific_text(normal_approach_speed(system, the_pair))//' m/s  collisions = '// &
             int_text(summary%collisions))
+        if (len(hydrodynamics%progress_text()) > 0) call log_line(hydrodynamics%progress_text())
       end if
       if (finished) exit
       if (solver%time >= next_field_time * (1.0_wp - 1.0e-12_wp) .and. solver%time < cfg%run%end_time) then
@@ -206,6 +215,17 @@ contains
 
   contains
 
+    !> The provider's loads of the current state, or none before the first collision with &pair
+    !> hydrodynamics_from = 'first_contact' (the fluid sees the moving bodies all the same).
+    subroutine felt_loads(theta)
+      real(wp), intent(in) :: theta
+      if (cfg%pair%hydrodynamics_from == 'first_contact' .and. summary%collisions == 0) then
+        hydrodynamic = particle_loads_zero(system%n)
+      else
+        call hydrodynamics%loads(system, theta, hydrodynamic)
+      end if
+    end subroutine felt_loads
+
     subroutine output_fields()
       call timer_tic(timer_io)
       call write_fluid_snapshot(solver, system_body_poses(system))
@@ -221,6 +241,7 @@ contains
       call write_fluid_checkpoint(transaction, solver)
       call forcing_driver_write_checkpoint(forcing, transaction)
       call write_pair_scene_group(transaction, cfg, system, loop, summary, hydrodynamic, output, last)
+      call hydrodynamics%write_checkpoint(transaction)
       call checkpoint_commit(transaction, cfg%output%checkpoints_kept)
       call timer_toc(timer_io)
     end subroutine checkpoint
@@ -239,15 +260,30 @@ contains
   !> The provider of &scene particle_coupling (the deck checks refuse the ones not available).
   subroutine create_hydrodynamics(cfg, solver, system, hydrodynamics)
     type(agglo_config_t), intent(in) :: cfg
-    type(fluid_solver_t), intent(in) :: solver
+    type(fluid_solver_t), intent(inout) :: solver
     type(particle_system_t), intent(in) :: system
     class(pair_hydrodynamics_t), allocatable, intent(out) :: hydrodynamics
     type(point_hydrodynamics_t), allocatable :: point
+    type(resolved_hydrodynamics_t), allocatable :: resolved
+    type(ibm_settings_t) :: settings
     select case (trim(cfg%scene%particle_coupling))
     case ('point')
       allocate(point)
       call point_hydrodynamics_create(point, solver, system, cfg%scene%added_mass)
       call move_alloc(point, hydrodynamics)
+    case ('resolved')
+      ! The imposition as for bodies in prescribed motion (&scene ibm_coupling, &bodies ghost_tolerance,
+      ! max_sweeps, load_method, mesh_level); the bodies themselves are the pair's.
+      settings%coupling = cfg%scene%ibm_coupling
+      settings%tolerance = cfg%bodies%ghost_tolerance
+      settings%max_sweeps = cfg%bodies%max_sweeps
+      settings%fluid_density = cfg%fluid%density
+      allocate(resolved)
+      call resolved_hydrodynamics_create(resolved, solver, system, settings, cfg%bodies%load_method, &
+                                         merge(cfg%bodies%mesh_level, -1, cfg%bodies%load_method == 'surface' .or. &
+                                               cfg%bodies%compare_loads), &
+                                         cfg%scene%added_mass, cfg%run%restart, cfg%pair%gravity)
+      call move_alloc(resolved, hydrodynamics)
     case default
       call fatal('resolved pair scene: &scene particle_coupling = '''//trim(cfg%scene%particle_coupling)// &
                  ''' is not available yet')

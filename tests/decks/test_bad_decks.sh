@@ -71,8 +71,8 @@ expect_error pair_scene_cfl 1 "&run name = 'p', dt_mode = 'cfl' /
 &scene fluid = 'none', particles = 'pair' /" "&run dt_mode = 'cfl'" "'fixed'"
 expect_error pair_without_particles 1 "&run name = 'p' /
 &scene fluid = 'stokes' /" '&scene particles' "'pair'"
-expect_error resolved_with_pair 1 "&run name = 'p' /
-&scene fluid = 'resolved', particles = 'pair' /" "&scene particle_coupling = 'resolved'" 'not available yet'
+expect_error resolved_pair_thin_body 1 "&run name = 'thin' /
+&scene fluid = 'resolved', particles = 'pair' /" '&pair' 'cells thin on this grid'
 expect_error resolved_pair_unknown_coupling 1 "&run name = 'p' /
 &scene fluid = 'resolved', particles = 'pair', particle_coupling = 'lagrange' /
 &grid nx = 8, ny = 8, nz = 8 /" "&scene particle_coupling = 'lagrange'" "'point' | 'resolved'"

@@ -1,0 +1,312 @@
+!> &scene particle_coupling = 'resolved': the hydrodynamic-load provider of the resolved pair scene
+!> (module pair_hydrodynamics) for free particles resolved by the immersed boundary (docs/theory.md,
+!> "Free particles"; docs/design.md, "The pair in the resolved fluid").
+!>
+!> Fluid step t^n -> t^{n+1}: the bodies are placed where the particle state predicts them at
+!> t^{n+1} (centre x^n + U^n dt, orientation turned by Omega^n dt) and move with the state's U^n,
+!> Omega^n, the latest known velocities; the immersed scene's staged step (immersed_step) imposes
+!> them and returns the momentum-balance force and torque F^n, T^n. The placement error, O(a dt^2),
+!> is some 1e-8 of a cell at the fluid's step; the one-step lag of the velocities is what the
+!> added-mass stabilisation below is about. The loads stay frozen over the fluid step's
+!> particle_substeps sub-steps (closest points, DLVO and collisions every sub-step).
+!>
+!> Added mass (&scene added_mass = .true.): a lagged load holds the fluid's reaction to the last
+!> change of the imposed velocity, F_a ~ -M_a (U^n - U^{n-1}) / dt, which fed back explicitly
+!> amplifies a velocity disturbance by -M_a / m per step (unstable for the face-on disk, M_a / m =
+!> 1.11 at the calcite density ratio 2.72). With the body-frame potential-flow tensors M_a =
+!> rho_f V diag(k_ax, k_tr, k_tr) and I_a = diag(0, i_tr, i_tr) (Lamb 1932 sec. 373), the update
+!> solves, per body axis,
+!>   (m + M_a) dU/dt = F^n + M_a A^n + F_other,   A^n = (U^n - U^{n-1}) / dt,
+!>   (I + I_a) dOmega/dt = T^n + I_a Alpha^n + T_other,
+!> i.e. the same added-mass estimate is put back into the lagged load and taken implicitly, so
+!> only the difference between the resolved reaction and its estimate is explicit. The load handed
+!> to the particle step is m dU/dt - F_other (I dOmega/dt - T_other), so that the explicit step,
+!> which divides by m (I), moves the body with that acceleration (as point_particle_coupling does).
+!>
+!> Gravity (&pair gravity, g): each body feels its net weight W = (rho_p - rho_f) V g as a
+!> constant external force (added to the loads), and the whole box (fluid and bodies' nodes) the
+!> uniform drive -sum W / L^3, the mean pressure gradient beyond the hydrostatic one that keeps the
+!> box's total momentum from growing (a settling suspension in a periodic box; the drive's share on
+!> each body, -V sum W / L^3, arrives through the momentum-balance load).
+!>
+!> State across fluid steps: the velocities imposed in the last step (for A^n) and the loads;
+!> both go into the checkpoint (resolved_write_checkpoint), the geometry is recomputed from the
+!> particle state every step.
+module resolved_hydrodynamics
+  use agglo_kinds, only: wp
+  use error_handling, only: fatal
+  use logger, only: log_line
+  use text_format, only: real_text, int_text
+  use checkpoint_files, only: checkpoint_t
+  use hdf5_io, only: h5_write_array, h5_read_array
+  use fluid_solver, only: fluid_solver_t
+  use forcing_driver, only: forcing_driver_t, forcing_driver_evaluate, forcing_driver_advance
+  use particle_system, only: particle_system_t, particle_loads_t
+  use rigid_body, only: angular_velocity_lab
+  use quaternion, only: rotation_matrix, quaternion_from_axis_angle, quaternion_product, quaternion_normalise
+  use spheroid, only: spheroid_t
+  use stokes_resistance, only: spheroid_added_mass_coefficients
+  use immersed_geometry, only: immersed_body_t, thin_dimension_cells
+  use immersed_boundary, only: ibm_settings_t, ibm_set_bodies, ibm_impose, imposition_report_t
+  use immersed_scene, only: immersed_scene_t, prescribed_motion_t, immersed_scene_create, immersed_step
+  use pair_hydrodynamics, only: pair_hydrodynamics_t
+  implicit none
+  private
+  public :: resolved_hydrodynamics_t, resolved_hydrodynamics_create, rotational_added_inertia
+
+  type, extends(pair_hydrodynamics_t) :: resolved_hydrodynamics_t
+    type(immersed_scene_t) :: scene
+    logical :: stabilise = .true.                      !< the added-mass stabilisation (&scene added_mass)
+    logical :: inject = .true.                         !< set the fluid inside the bodies to their motion (a start)
+    real(wp) :: box(3) = 0                             !< m, the periodic box
+    real(wp) :: dt = 0                                 !< s, the last fluid step (0 before the first)
+    real(wp), allocatable :: force(:, :), torque(:, :)          !< (3, n) N, N m: F^n, T^n of the last step (lab)
+    real(wp), allocatable :: added_mass(:, :)                   !< (3, n) kg, body frame
+    real(wp), allocatable :: weight(:, :)                       !< (3, n) N, net weight (rho_p - rho_f) V g (lab)
+    real(wp), allocatable :: added_inertia(:, :)                !< (3, n) kg m^2, body frame
+    real(wp), allocatable :: imposed_velocity(:, :), imposed_angular_velocity(:, :)   !< (3, n) lab, last step
+    real(wp), allocatable :: acceleration(:, :), angular_acceleration(:, :)           !< (3, n) lab, A^n, Alpha^n
+  contains
+    procedure :: prepare => resolved_prepare
+    procedure :: fluid_step => resolved_fluid_step
+    procedure :: loads => resolved_loads
+    procedure :: write_checkpoint => resolved_write_checkpoint
+    procedure :: read_checkpoint => resolved_read_checkpoint
+    procedure :: progress_text => resolved_progress_text
+  end type resolved_hydrodynamics_t
+
+contains
+
+  !> The provider for the system's bodies in the solver's fluid (collective: classifies the grid).
+  !> settings: the imposition (&scene ibm_coupling, &bodies ghost_tolerance, max_sweeps);
+  !> load_method, surface_level: as immersed_scene_create (&bodies load_method, mesh_level);
+  !> stabilise: the added-mass stabilisation; restart: the fluid already holds the bodies;
+  !> gravity: m/s^2 (module header).
+  subroutine resolved_hydrodynamics_create(provider, solver, system, settings, load_method, surface_level, &
+                                           stabilise, restart, gravity)
+    type(resolved_hydrodynamics_t), intent(out) :: provider
+    type(fluid_solver_t), intent(inout) :: solver
+    type(particle_system_t), intent(in) :: system
+    type(ibm_settings_t), intent(in) :: settings
+    character(len=*), intent(in) :: load_method
+    integer, intent(in) :: surface_level
+    logical, intent(in) :: stabilise, restart
+    real(wp), intent(in) :: gravity(3)
+    type(prescribed_motion_t), allocatable :: motion(:)
+    real(wp) :: k(2), fluid_mass, ratio_translation, ratio_rotation
+    integer :: i
+    provider%box = [solver%grid%lx, solver%grid%ly, solver%grid%lz]
+    allocate(motion(system%n))
+    allocate(provider%added_mass(3, system%n), provider%added_inertia(3, system%n), provider%weight(3, system%n))
+    ratio_translation = 0
+    ratio_rotation = 0
+    do i = 1, system%n
+      call require_thick_enough(system%shapes(i), solver)
+      ! At rest where the particle is: the scene's first placement; every step places the bodies anew.
+      motion(i)%shape = system%shapes(i)
+      motion(i)%centre = system%bodies(i)%position
+      motion(i)%orientation = system%bodies(i)%quaternion
+      fluid_mass = solver%density * system%shapes(i)%volume
+      provider%weight(:, i) = (system%bodies(i)%mass - fluid_mass) * gravity
+      k = spheroid_added_mass_coefficients(system%shapes(i)%a, system%shapes(i)%b)
+      provider%added_mass(:, i) = fluid_mass * [k(1), k(2), k(2)]
+      provider%added_inertia(:, i) = [0.0_wp, 1.0_wp, 1.0_wp] * &
+                                     rotational_added_inertia(system%shapes(i), solver%density)
+      ratio_translation = max(ratio_translation, maxval(provider%added_mass(:, i)) / system%bodies(i)%mass)
+      ratio_rotation = max(ratio_rotation, maxval(provider%added_inertia(:, i) / system%bodies(i)%inertia_body))
+    end do
+    call immersed_scene_create(provider%scene, solver, motion, settings, &
+                               -sum(provider%weight, dim=2) / (provider%box(1) * provider%box(2) * provider%box(3)), &
+                               load_method, surface_level)
+    allocate(provider%force(3, system%n), provider%torque(3, system%n))
+    provider%force = 0
+    provider%torque = 0
+    provider%imposed_velocity = provider%force
+    provider%imposed_angular_velocity = provider%force
+    provider%acceleration = provider%force
+    provider%angular_acceleration = provider%force
+    provider%stabilise = stabilise
+    provider%inject = .not. restart
+    call log_line('resolved particles: largest added mass / mass '//real_text(ratio_translation)// &
+        ', added inertia / inertia '//real_text(ratio_rotation)//' (potential flow); added-mass stabilisation '// &
+        merge('on ', 'off', stabilise))
+    if (.not. stabilise .and. max(ratio_translation, ratio_rotation) >= 1.0_wp) call log_line('resolved particles: '// &
+        'warning: an added mass or inertia above the body''s own with the stabilisation off: the lagged loads '// &
+        'amplify a disturbance by that ratio per fluid step (unstable; &scene added_mass = .true.)')
+  end subroutine resolved_hydrodynamics_create
+
+  !> A body thinner than 4 cells is refused with the grid it needs: the ghost layers of its opposite
+  !> faces would overlap (ibm-notes section 0; the same rule as for the &bodies group).
+  subroutine require_thick_enough(shape, solver)
+    type(spheroid_t), intent(in) :: shape
+    type(fluid_solver_t), intent(in) :: solver
+    real(wp), parameter :: thinnest_cells = 4.0_wp
+    real(wp) :: cells
+    integer :: needed
+    character(len=320) :: text
+    cells = thin_dimension_cells(shape, solver%grid)
+    if (cells >= thinnest_cells) return
+    needed = ceiling(thinnest_cells * max(solver%grid%lx, solver%grid%ly, solver%grid%lz) / (2.0_wp * min(shape%a, shape%b)))
+    write(text, '(a,f5.2,a,i0,a)') 'deck: &pair: the particle is ', cells, ' cells thin on this grid; the immersed '// &
+        'boundary (&scene particle_coupling = ''resolved'') needs at least 4: use &grid nx = ny = nz >= ', needed, &
+        ' for this box, or a larger &pair radius or smaller aspect_ratio'
+    call fatal(trim(text))
+  end subroutine require_thick_enough
+
+  !> Rotational added inertia (kg m^2) of a spheroid about a transverse axis in potential flow
+  !> (Lamb 1932 sec. 373, rotation about y of the ellipsoid (a, b, b)):
+  !>   i_tr = rho_f V (b^2 - a^2)^2 (alpha0_ax - alpha0_tr) / (5 [2 (b^2 - a^2) + (b^2 + a^2) (alpha0_tr - alpha0_ax)]),
+  !> alpha0 = 2 k / (1 + k) from the translational coefficients k; zero for a sphere. About the
+  !> symmetry axis a spheroid displaces no fluid as it turns: zero.
+  pure real(wp) function rotational_added_inertia(shape, fluid_density) result(inertia)
+    type(spheroid_t), intent(in) :: shape
+    real(wp), intent(in) :: fluid_density
+    real(wp) :: k(2), alpha0(2), difference
+    k = spheroid_added_mass_coefficients(shape%a, shape%b)
+    alpha0 = 2.0_wp * k / (1.0_wp + k)
+    difference = shape%b**2 - shape%a**2
+    inertia = 0.0_wp
+    if (abs(difference) <= 1.0e-8_wp * shape%b**2) return
+    inertia = fluid_density * shape%volume * difference**2 * (alpha0(1) - alpha0(2)) &
+              / (5.0_wp * (2.0_wp * difference + (shape%b**2 + shape%a**2) * (alpha0(2) - alpha0(1))))
+  end function rotational_added_inertia
+
+  !> At a start, the fluid inside each body (and its ghost rows) takes the body's rigid motion (the
+  !> paper's injection); the imposed velocities start as the bodies' own (no change to react to).
+  subroutine resolved_prepare(self, solver, system)
+    class(resolved_hydrodynamics_t), intent(inout) :: self
+    type(fluid_solver_t), intent(inout) :: solver
+    type(particle_system_t), intent(in) :: system
+    type(immersed_body_t), allocatable :: bodies(:)
+    type(imposition_report_t) :: report
+    if (.not. self%inject) return
+    call current_bodies(self, system, 0.0_wp, bodies)
+    call ibm_set_bodies(self%scene%ibm, solver%grid, bodies, self%imposed_velocity, self%imposed_angular_velocity, &
+                        classify=.true.)
+    call ibm_impose(self%scene%ibm, solver%grid, solver%u, solver%v, solver%w, report)
+    self%inject = .false.
+  end subroutine resolved_prepare
+
+  subroutine resolved_fluid_step(self, solver, forcing, system, dt)
+    class(resolved_hydrodynamics_t), intent(inout) :: self
+    type(fluid_solver_t), intent(inout) :: solver
+    type(forcing_driver_t), intent(inout) :: forcing
+    type(particle_system_t), intent(in) :: system
+    real(wp), intent(in) :: dt
+    type(immersed_body_t), allocatable :: bodies(:)
+    real(wp) :: previous(3, system%n), previous_angular(3, system%n)
+    previous = self%imposed_velocity
+    previous_angular = self%imposed_angular_velocity
+    call current_bodies(self, system, dt, bodies)
+    if (forcing%active) then
+      call forcing_driver_evaluate(forcing)
+      call immersed_step(self%scene, solver, dt, forcing%fx, forcing%fy, forcing%fz, bodies=bodies, &
+                         velocity=self%imposed_velocity, angular_velocity=self%imposed_angular_velocity)
+      call forcing_driver_advance(forcing, dt)
+    else
+      call immersed_step(self%scene, solver, dt, bodies=bodies, velocity=self%imposed_velocity, &
+                         angular_velocity=self%imposed_angular_velocity)
+    end if
+    self%force = self%scene%force
+    self%torque = self%scene%torque
+    self%dt = dt
+    self%acceleration = (self%imposed_velocity - previous) / dt
+    self%angular_acceleration = (self%imposed_angular_velocity - previous_angular) / dt
+  end subroutine resolved_fluid_step
+
+  !> The bodies of the system's state carried ahead by lead (s) at their current velocities, and
+  !> those velocities in imposed_velocity, imposed_angular_velocity (lab).
+  subroutine current_bodies(self, system, lead, bodies)
+    class(resolved_hydrodynamics_t), intent(inout) :: self
+    type(particle_system_t), intent(in) :: system
+    real(wp), intent(in) :: lead
+    type(immersed_body_t), allocatable, intent(out) :: bodies(:)
+    real(wp) :: omega(3)
+    integer :: i
+    allocate(bodies(system%n))
+    do i = 1, system%n
+      omega = angular_velocity_lab(system%bodies(i))
+      bodies(i)%shape = system%shapes(i)
+      bodies(i)%centre = modulo(system%bodies(i)%position + lead * system%bodies(i)%velocity, self%box)
+      bodies(i)%orientation = quaternion_normalise(quaternion_product( &
+          quaternion_from_axis_angle(omega, norm2(omega) * lead), system%bodies(i)%quaternion))
+      self%imposed_velocity(:, i) = system%bodies(i)%velocity
+      self%imposed_angular_velocity(:, i) = omega
+    end do
+  end subroutine current_bodies
+
+  !> The last fluid step's loads, with the added-mass stabilisation (module header) when on.
+  subroutine resolved_loads(self, system, theta, loads)
+    class(resolved_hydrodynamics_t), intent(in) :: self
+    type(particle_system_t), intent(in) :: system
+    real(wp), intent(in) :: theta
+    type(particle_loads_t), intent(inout) :: loads
+    real(wp) :: rotation(3, 3), total(3), estimate(3), rate(3)
+    integer :: i
+    if (.not. (theta >= 0.0_wp .and. theta <= 1.0_wp)) call fatal('resolved particles: loads at theta outside [0, 1]')
+    do i = 1, system%n
+      if (.not. self%stabilise) then
+        loads%force(:, i) = self%force(:, i) + self%weight(:, i)
+        loads%torque(:, i) = self%torque(:, i)
+        cycle
+      end if
+      rotation = rotation_matrix(system%bodies(i)%quaternion)
+      associate (body => system%bodies(i), other_force => system%dlvo_loads%force(:, i), &
+                 other_torque => system%dlvo_loads%torque(:, i))
+        ! Body frame: (m + M_a) a = F + M_a A + F_other; the load is m a - F_other.
+        total = matmul(self%force(:, i) + self%weight(:, i) + other_force, rotation)
+        estimate = matmul(self%acceleration(:, i), rotation)
+        rate = (total + self%added_mass(:, i) * estimate) / (body%mass + self%added_mass(:, i))
+        loads%force(:, i) = body%mass * matmul(rotation, rate) - other_force   ! the weight included
+        total = matmul(self%torque(:, i) + other_torque, rotation)
+        estimate = matmul(self%angular_acceleration(:, i), rotation)
+        rate = (total + self%added_inertia(:, i) * estimate) / (body%inertia_body + self%added_inertia(:, i))
+        loads%torque(:, i) = matmul(rotation, body%inertia_body * rate) - other_torque
+      end associate
+    end do
+  end subroutine resolved_loads
+
+  !> The last step's ghost-row sweeps (near contact the two bodies' rows couple and need more) and
+  !> the bodies' force magnitudes.
+  function resolved_progress_text(self) result(text)
+    class(resolved_hydrodynamics_t), intent(in) :: self
+    character(len=:), allocatable :: text
+    integer :: i
+    text = '  immersed boundary: sweeps '//int_text(self%scene%predicted%sweeps)//', residual '// &
+           real_text(self%scene%predicted%residual)//', |F| ='
+    do i = 1, size(self%force, 2)
+      text = text//' '//real_text(norm2(self%force(:, i)))
+    end do
+    text = text//' N'
+  end function resolved_progress_text
+
+  !> The provider's state across fluid steps (group resolved_hydrodynamics of the transaction).
+  subroutine resolved_write_checkpoint(self, transaction)
+    class(resolved_hydrodynamics_t), intent(in) :: self
+    type(checkpoint_t), intent(in) :: transaction
+    associate (file => transaction%file)
+      call h5_write_array(file, 'resolved_hydrodynamics/force', self%force)
+      call h5_write_array(file, 'resolved_hydrodynamics/torque', self%torque)
+      call h5_write_array(file, 'resolved_hydrodynamics/imposed_velocity', self%imposed_velocity)
+      call h5_write_array(file, 'resolved_hydrodynamics/imposed_angular_velocity', self%imposed_angular_velocity)
+      call h5_write_array(file, 'resolved_hydrodynamics/acceleration', self%acceleration)
+      call h5_write_array(file, 'resolved_hydrodynamics/angular_acceleration', self%angular_acceleration)
+      call h5_write_array(file, 'resolved_hydrodynamics/dt', self%dt)
+    end associate
+  end subroutine resolved_write_checkpoint
+
+  subroutine resolved_read_checkpoint(self, restart)
+    class(resolved_hydrodynamics_t), intent(inout) :: self
+    type(checkpoint_t), intent(in) :: restart
+    associate (file => restart%file)
+      call h5_read_array(file, 'resolved_hydrodynamics/force', self%force)
+      call h5_read_array(file, 'resolved_hydrodynamics/torque', self%torque)
+      call h5_read_array(file, 'resolved_hydrodynamics/imposed_velocity', self%imposed_velocity)
+      call h5_read_array(file, 'resolved_hydrodynamics/imposed_angular_velocity', self%imposed_angular_velocity)
+      call h5_read_array(file, 'resolved_hydrodynamics/acceleration', self%acceleration)
+      call h5_read_array(file, 'resolved_hydrodynamics/angular_acceleration', self%angular_acceleration)
+      call h5_read_array(file, 'resolved_hydrodynamics/dt', self%dt)
+    end associate
+    self%inject = .false.
+  end subroutine resolved_read_checkpoint
+end module resolved_hydrodynamics
