@@ -41,7 +41,7 @@ module particle_output
     character(len=16) :: shape = ''         !< 'sphere' | 'needle' | 'disk' | 'spheroid'
     real(wp) :: aspect_ratio = 1.0_wp       !< a/b of the spheroids
     real(wp) :: radius = 0.0_wp             !< m, volume-equivalent radius
-    character(len=16) :: fluid = ''         !< 'none' | 'stokes' | 'resolved_point'
+    character(len=24) :: fluid = ''         !< 'none' | 'stokes' | 'resolved_point' | 'resolved_resolved'
     integer(i8) :: seed = 0_i8              !< &run seed
     integer :: bodies = 2                   !< number of bodies; > 2 adds /bodies and the events' body columns
   end type pair_run_metadata_t
@@ -88,7 +88,7 @@ module particle_output
     integer(i8) :: seed = 0_i8
     character(len=16) :: shape = ''
     real(wp) :: aspect_ratio = 1.0_wp
-    character(len=16) :: fluid = ''
+    character(len=24) :: fluid = ''
     character(len=16) :: outcome = ''                 !< 'agglomerated' | 'rebounded' | 'no_contact'
     logical :: outcome_settled = .false.              !< false: decided in flight (docs/theory.md, Run outcome)
     character(len=16) :: end_rule = ''                !< &pair end_rule: 'settled' | 'paper'

@@ -127,6 +127,13 @@ for ranks in 1 2; do
     echo "FAIL resolved_pair_runs/restart_bit_for_bit_${ranks}_ranks: a run failed: $(tail -n 3 ./*$ranks*.out | head -c 400)"
   fi
 done
+# The fidelity written in full (summary.json and particles.h5 name it; batches are grouped by it).
+if [ -f whole1/summary.json ] && grep -q '"fluid": "resolved_resolved"' whole1/summary.json \
+   && h5dump -d /fluid whole1/particles.h5 2>/dev/null | grep -q '"resolved_resolved"'; then
+  echo "PASS resolved_pair_runs/fidelity_named_in_outputs  (fluid = resolved_resolved)"
+else
+  echo "FAIL resolved_pair_runs/fidelity_named_in_outputs: $(grep -o '"fluid": "[^"]*"' whole1/summary.json 2>/dev/null)"
+fi
 if [ -f whole1/particles.h5 ] && [ -f whole2/particles.h5 ] \
    && h5diff -q --relative=1e-9 whole1/particles.h5 whole2/particles.h5 > ranks.txt 2>&1; then
   echo "PASS resolved_pair_runs/one_and_two_ranks_agree  (particles.h5 to 1e-9 relative)"
