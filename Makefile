@@ -135,9 +135,14 @@ ifneq ($(filter-out help clean deps tools-deps,$(MAKECMDGOALS)),)
 include $(BUILD)/deps.mk
 endif
 
-run: deps ## install, build, and run DECK (default input/default.nml) on NP ranks, with ARGS
+run: deps tools-deps ## install, build, and run DECK (default input/default.nml) on NP ranks, with ARGS
 	@$(MAKE) --no-print-directory build
 	$(MPIRUN) -np $(NP) $(BUILD)/agglo $(DECK) $(ARGS)
+	@# The default deck's picture: the flow on the plane through both needles (tools/agglo-figure8).
+	@if [ "$(DECK)" = input/default.nml ] && [ -f output/default/fields.xdmf ]; then \
+	  tools/agglo-figure8 output/default -o output/default/figure8.png > /dev/null && \
+	  echo "picture: output/default/figure8.png (|u| on the plane through both needles, latest snapshot);" \
+	       "the whole run in ParaView: output/default/fields.xdmf"; fi
 
 test: deps tools-deps ## install, build, and run every test (closing line "N passed, N failed")
 	@$(MAKE) --no-print-directory build $(TEST_PROGRAMS)
