@@ -64,7 +64,7 @@ fi
 # Immersed bodies in prescribed motion (the paper's needle and disk, moving and rotating: reclassified
 # every step; explicit diffusion): the coupled step against the fluid-only step (target <= 1.3x,
 # docs/performance.md), by part, for both couplings, 1 and 2 ranks; then against the number of
-# bodies. Medians over 10 (128^3) or 20 (64^3) repetitions, slowest rank; on 1 rank the process's
+# bodies and against the mesh level of the ghost-node geometry. Medians over 10 (128^3) or 20 (64^3) repetitions, slowest rank; on 1 rank the process's
 # CPU time (robust on a shared machine), on 2 ranks the wall time.
 if [[ $parts == *immersed* ]]; then
   echo
@@ -77,6 +77,9 @@ if [[ $parts == *immersed* ]]; then
     (cd "$work" && mpirun -np 1 "$immersed_exe" 128 10 $bodies implicit cpu)
   done
   (cd "$work" && mpirun -np 1 "$immersed_exe" 64 20 2 implicit cpu)
+  for level in 1 2 3; do   # the ghost nodes on the icosphere (&bodies geometry = 'mesh')
+    (cd "$work" && mpirun -np 1 "$immersed_exe" 128 10 2 implicit cpu $level)
+  done
 fi
 
 [[ $parts == *pair* ]] || exit 0

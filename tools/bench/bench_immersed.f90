@@ -1,8 +1,10 @@
 !> Cost of the coupled step (immersed bodies in prescribed motion) against the fluid-only step, and
 !> its parts (tools/bench.sh, `make bench`; docs/performance.md, "Immersed boundary").
-!> Usage: mpirun -np R bench_immersed N STEPS BODIES COUPLING [CLOCK]
+!> Usage: mpirun -np R bench_immersed N STEPS BODIES COUPLING [CLOCK [MESH_LEVEL]]
 !>   COUPLING = implicit | explicit; CLOCK = wall (default) | cpu (the process's CPU time: on a shared
-!>   machine the 1-rank figures then do not count the time other processes hold the core).
+!>   machine the 1-rank figures then do not count the time other processes hold the core);
+!>   MESH_LEVEL >= 0: the ghost nodes see the icosphere of that level (&bodies geometry = 'mesh',
+!>   20 4^level faces), -1 (default) the analytic spheroid.
 !>
 !> Water in a 1 mm box at N^3 with the explicit diffusion (AB2) and the incremental pressure, a
 !> random field of rms 1 mm/s and a uniform drive. Bodies of the paper's size (volume-equivalent
@@ -30,6 +32,7 @@ program bench_immersed
   use sample_statistics, only: median
   use spheroid, only: make_spheroid
   use quaternion, only: quaternion_from_axis_angle
+  use icosphere_mesh, only: build_icosphere_mesh
   use immersed_geometry, only: immersed_body_t
   use immersed_boundary, only: ibm_settings_t, ibm_set_bodies, ibm_begin_step, ibm_impose, ibm_step_loads, &
                                cell_divergence_max
@@ -48,7 +51,7 @@ program bench_immersed
   type(ibm_settings_t) :: settings
   character(len=32) :: argument, coupling
   logical :: use_cpu_clock
-  integer :: n, steps, n_bodies, s, p, ghosts, fallbacks, c
+  integer :: n, steps, n_bodies, s, p, ghosts, fallbacks, c, mesh_level
   real(wp), allocatable :: t_fluid(:), t_coupled(:), t_parts(:, :)
   real(wp) :: dt, t0, drive(3), lap_start, part_seconds(n_parts)
 
@@ -59,6 +62,9 @@ program bench_immersed
   call get_command_argument(4, coupling)
   call get_command_argument(5, argument)
   use_cpu_clock = (trim(argument) == 'cpu')
+  mesh_level = -1
+  call get_command_argument(6, argument)
+  if (len_trim(argument) > 0) read(argument, *) mesh_level
   allocate(t_fluid(steps), t_coupled(steps), t_parts(n_parts, steps))
 
   grid_cfg = grid_config_t(nx=n, ny=n, nz=n, length_x=box, length_y=box, length_z=box)
@@ -107,8 +113,9 @@ program bench_immersed
     write(*, '(i5,i3,i3,1x,a9,3f9.2,*(f9.2))') n, n_ranks, n_bodies, trim(coupling), 1.0e3_wp * median(t_fluid), &
         1.0e3_wp * median(t_coupled), median(t_coupled) / median(t_fluid), &
         [(1.0e3_wp * median(t_parts(p, :)), p = 1, n_parts)]
-    write(*, '(24x,a,i0,a,i0,a,i0,2a)') 'ghost nodes ', ghosts, ', sweeps (u*) ', scene%predicted%sweeps, &
-        ', fallbacks ', fallbacks, '; clock ', trim(merge('cpu ', 'wall', use_cpu_clock))
+    write(*, '(24x,a,i0,a,i0,a,i0,3a,i0)') 'ghost nodes ', ghosts, ', sweeps (u*) ', scene%predicted%sweeps, &
+        ', fallbacks ', fallbacks, '; clock ', trim(merge('cpu ', 'wall', use_cpu_clock)), &
+        '; icosphere level (-1: analytic) ', mesh_level
   end if
   call parallel_stop()
 
@@ -142,6 +149,7 @@ contains
       motion(m)%orientation = quaternion_from_axis_angle([1.0_wp, 2.0_wp, 3.0_wp] + m, 0.3_wp * m)
       motion(m)%velocity = 1.0e-3_wp * [0.6_wp, -0.5_wp, 0.62_wp] * (1 + mod(m, 3))
       motion(m)%angular_velocity = 20.0_wp * [0.2_wp, 0.5_wp, -0.84_wp] * (1 - 2 * mod(m, 2))
+      if (mesh_level >= 0) call build_icosphere_mesh(motion(m)%shape, mesh_level, motion(m)%mesh)
     end do
   end function bench_bodies
 
