@@ -1,73 +1,194 @@
-!> The immersed-boundary validation ladder (make validate; docs/validation.md, "Immersed boundary"):
-!> simple-cubic sphere arrays in Stokes flow at D/dx about 8, 12 and 16, for phi = 0.125 and 0.064,
-!> implicit and explicit coupling, against Zick & Homsy (1982, J. Fluid Mech. 115, 13, Table 2:
-!> K = 4.292 at phi = 0.125, 2.810 at phi = 0.064), with the observed order of convergence between
-!> the coarsest and the finest grid, p = ln(e_8 / e_16) / ln(D_16 / D_8). Then a rotating sphere at
-!> D/dx = 8 and 12 in boxes L/D = 2, 3, 4: the torque -T (it opposes the rotation) extrapolated to
-!> the unbounded box by a least-squares line in (a/L)^3 against 8 pi mu a^3 Omega (Stokes).
-!> Prints Markdown tables.
+!> The immersed-boundary validation ladder (make validate; docs/validation.md, "Immersed boundary"),
+!> as Markdown tables. Each table is a section; the command-line arguments choose sections (none: all),
+!> and a section may be narrowed as section:D/dx:coupling, e.g. `rotating:16:implicit`.
+!> - arrays: simple-cubic sphere arrays in Stokes flow at D/dx about 8, 12 and 16, for phi = 0.125 and
+!>   0.064, implicit and explicit coupling, against Zick & Homsy (1982, J. Fluid Mech. 115, 13,
+!>   Table 2: K = 4.292 at phi = 0.125, 2.810 at phi = 0.064), with the observed order of
+!>   convergence between the coarsest and the finest grid, p = ln(e_8 / e_16) / ln(D_16 / D_8).
+!> - dilute: the same at phi = 0.027 (K = 2.008, Zick & Homsy Table 2; Sangani & Acrivos 1982,
+!>   Int. J. Multiphase Flow 8, 343, Eq. 4.11 gives 2.0077) at D/dx about 10, 12 and 16.
+!> - rotating: a rotating sphere at D/dx = 8, 12 and 16 in boxes L/D = 2, 3, 4: the torque -T (it
+!>   opposes the rotation) extrapolated to the unbounded box by a least-squares line in (a/L)^3
+!>   against 8 pi mu a^3 Omega (Stokes).
+!> - sweeps: Jacobi sweeps of the implicit ghost rows to 1e-12 for needles and disks (aspect 5) at
+!>   random orientations and positions, 64^3 to 256^3 (immersed_sweep_survey).
 program bench_immersed_ladder
   use agglo_kinds, only: wp
   use parallel_env, only: parallel_start, parallel_stop, is_root
   use sphere_array_case, only: sphere_array_case_t, sphere_array_result_t, run_sphere_array
+  use immersed_sweep_survey, only: sweep_survey_t, run_sweep_survey
   implicit none
-  real(wp), parameter :: fractions(2) = [0.125_wp, 0.064_wp], references(2) = [4.292_wp, 2.810_wp]
-  real(wp), parameter :: diameters(3) = [8.0_wp, 12.0_wp, 16.0_wp]
   character(len=8), parameter :: couplings(2) = [character(len=8) :: 'implicit', 'explicit']
-  type(sphere_array_case_t) :: case
-  type(sphere_array_result_t) :: result
-  real(wp) :: errors(3), sizes(3), x(3), y(3), slope, unbounded
-  integer :: f, c, d, resolution
+  character(len=64) :: argument
+  integer :: a
 
   call parallel_start()
-  if (is_root()) then
-    print '(a)', '| phi | coupling | cells | D/dx | K | K (Z&H) | error | steps | sweeps mean/max | slip | wall s |'
-    print '(a)', '|---|---|---|---|---|---|---|---|---|---|---|'
-  end if
-  do f = 1, size(fractions)
-    do c = 1, size(couplings)
-      do d = 1, size(diameters)
-        case%volume_fraction = fractions(f)
-        case%coupling = couplings(c)
-        case%cells = nint(diameters(d) / (6.0_wp * fractions(f) / acos(-1.0_wp))**(1.0_wp / 3.0_wp))
-        case%max_steps = 60000
-        call run_sphere_array(case, result)
-        errors(d) = result%drag_coefficient / references(f) - 1.0_wp
-        sizes(d) = result%diameter_cells
-        if (is_root()) print '(a,f5.3,a,a,a,i0,a,f5.2,a,f6.4,a,f5.3,a,f7.2,a,i0,a,f4.1,a,i0,a,es8.1,a,f6.1,a,a)', &
-            '| ', fractions(f), ' | ', trim(couplings(c)), ' | ', case%cells, '^3 | ', result%diameter_cells, ' | ', &
-            result%drag_coefficient, ' | ', references(f), ' | ', 100 * errors(d), '% | ', result%steps, ' | ', &
-            result%mean_sweeps, '/', result%max_sweeps, ' | ', result%slip, ' | ', result%wall_seconds, &
-            merge(' |         ', ' unsteady |', result%steady)
-      end do
-      if (is_root()) print '(a,f5.3,a,a,a,f5.2)', '|   | observed order, phi = ', fractions(f), ', ', trim(couplings(c)), &
-          ': ', log(abs(errors(1)) / abs(errors(3))) / log(sizes(3) / sizes(1))
+  if (command_argument_count() == 0) then
+    call run_section('arrays')
+    call run_section('dilute')
+    call run_section('rotating')
+    call run_section('sweeps')
+  else
+    do a = 1, command_argument_count()
+      call get_command_argument(a, argument)
+      call run_section(trim(argument))
     end do
-  end do
-  if (is_root()) then
-    print '(a)', ''
-    print '(a)', '| coupling | cells | D/dx | a/L | T / (8 pi mu a^3 Omega) | steps | wall s |'
-    print '(a)', '|---|---|---|---|---|---|---|'
   end if
-  do resolution = 8, 12, 4
-  do c = 1, size(couplings)
-    do d = 1, 3
-      case%rotating = .true.
-      case%coupling = couplings(c)
-      case%cells = resolution * (d + 1)
-      case%volume_fraction = acos(-1.0_wp) / 6.0_wp / real(d + 1, wp)**3
-      call run_sphere_array(case, result)
-      x(d) = result%radius_over_box**3
-      y(d) = -result%torque(3) / result%stokes_torque
-      if (is_root()) print '(a,a,a,i0,a,f5.2,a,f6.4,a,f8.5,a,i0,a,f6.1,a,a)', '| ', trim(couplings(c)), ' | ', &
-          case%cells, '^3 | ', result%diameter_cells, ' | ', result%radius_over_box, ' | ', y(d), ' | ', result%steps, &
-          ' | ', result%wall_seconds, merge(' |         ', ' unsteady |', result%steady)
-    end do
-    slope = (sum(x * y) - sum(x) * sum(y) / 3) / (sum(x**2) - sum(x)**2 / 3)
-    unbounded = (sum(y) - slope * sum(x)) / 3
-    if (is_root()) print '(a,a,a,f8.5,a,f7.2,a)', '|   | ', trim(couplings(c)), ': extrapolated to a/L = 0: ', unbounded, &
-        ' (error ', 100 * (unbounded - 1), '%)'
-  end do
-  end do
   call parallel_stop()
+
+contains
+
+  !> One section, narrowed by the optional ":D/dx:coupling" suffixes.
+  subroutine run_section(spec)
+    character(len=*), intent(in) :: spec
+    character(len=64) :: name, only_coupling
+    real(wp) :: only_diameter
+    integer :: first, second, status
+    first = index(spec, ':')
+    name = spec
+    only_diameter = 0
+    only_coupling = ''
+    if (first > 0) then
+      name = spec(:first - 1)
+      second = index(spec(first + 1:), ':')
+      if (second > 0) then
+        only_coupling = spec(first + second + 1:)
+        second = first + second
+      else
+        second = len_trim(spec) + 1
+      end if
+      read(spec(first + 1:second - 1), *, iostat=status) only_diameter
+      if (status /= 0) only_diameter = -1
+    end if
+    select case (trim(name))
+    case ('arrays')
+      call array_table([0.125_wp, 0.064_wp], [4.292_wp, 2.810_wp], [8.0_wp, 12.0_wp, 16.0_wp], only_diameter, &
+                       only_coupling)
+    case ('dilute')
+      call array_table([0.027_wp], [2.008_wp], [10.0_wp, 12.0_wp, 16.0_wp], only_diameter, only_coupling)
+    case ('rotating')
+      call rotating_table([8, 12, 16], only_diameter, only_coupling)
+    case ('sweeps')
+      call sweep_table()
+    case default
+      if (is_root()) print '(a)', 'bench_immersed_ladder: unknown section '''//trim(spec)// &
+          '''; allowed: arrays, dilute, rotating, sweeps (each optionally :D/dx:coupling)'
+      error stop 1
+    end select
+  end subroutine run_section
+
+  logical function chosen(diameter, coupling, only_diameter, only_coupling)
+    real(wp), intent(in) :: diameter, only_diameter
+    character(len=*), intent(in) :: coupling, only_coupling
+    chosen = (only_diameter == 0 .or. abs(diameter - only_diameter) < 0.5_wp) .and. &
+             (len_trim(only_coupling) == 0 .or. trim(coupling) == trim(only_coupling))
+  end function chosen
+
+  !> Sphere arrays against Zick & Homsy, with the observed order between the first and last D/dx.
+  subroutine array_table(fractions, references, diameters, only_diameter, only_coupling)
+    real(wp), intent(in) :: fractions(:), references(:), diameters(:), only_diameter
+    character(len=*), intent(in) :: only_coupling
+    type(sphere_array_case_t) :: case
+    type(sphere_array_result_t) :: result
+    real(wp) :: errors(size(diameters)), sizes(size(diameters))
+    integer :: f, c, d, n
+    if (is_root()) then
+      print '(a)', '| phi | coupling | cells | D/dx | K | K (Z&H) | error | steps | sweeps mean/max | slip | wall s |'
+      print '(a)', '|---|---|---|---|---|---|---|---|---|---|---|'
+    end if
+    n = size(diameters)
+    do f = 1, size(fractions)
+      do c = 1, size(couplings)
+        errors = 0
+        do d = 1, n
+          if (.not. chosen(diameters(d), couplings(c), only_diameter, only_coupling)) cycle
+          case%volume_fraction = fractions(f)
+          case%coupling = couplings(c)
+          case%cells = nint(diameters(d) / (6.0_wp * fractions(f) / acos(-1.0_wp))**(1.0_wp / 3.0_wp))
+          case%max_steps = 80000
+          call run_sphere_array(case, result)
+          errors(d) = result%drag_coefficient / references(f) - 1.0_wp
+          sizes(d) = result%diameter_cells
+          if (is_root()) print '(a,f5.3,a,a,a,i0,a,f5.2,a,f6.4,a,f5.3,a,f7.2,a,i0,a,f4.1,a,i0,a,es8.1,a,f6.1,a,a)', &
+              '| ', fractions(f), ' | ', trim(couplings(c)), ' | ', case%cells, '^3 | ', result%diameter_cells, ' | ', &
+              result%drag_coefficient, ' | ', references(f), ' | ', 100 * errors(d), '% | ', result%steps, ' | ', &
+              result%mean_sweeps, '/', result%max_sweeps, ' | ', result%slip, ' | ', result%wall_seconds, &
+              merge(' |         ', ' unsteady |', result%steady)
+        end do
+        if (is_root() .and. errors(1) /= 0 .and. errors(n) /= 0) &
+          print '(a,f5.3,a,a,a,f5.2)', '|   | observed order, phi = ', fractions(f), ', ', trim(couplings(c)), &
+              ': ', log(abs(errors(1)) / abs(errors(n))) / log(sizes(n) / sizes(1))
+      end do
+    end do
+    if (is_root()) print '(a)', ''
+  end subroutine array_table
+
+  !> Rotating sphere in boxes L/D = 2, 3, 4 at each D/dx, extrapolated in (a/L)^3.
+  subroutine rotating_table(resolutions, only_diameter, only_coupling)
+    integer, intent(in) :: resolutions(:)
+    real(wp), intent(in) :: only_diameter
+    character(len=*), intent(in) :: only_coupling
+    type(sphere_array_case_t) :: case
+    type(sphere_array_result_t) :: result
+    real(wp) :: x(3), y(3), slope, unbounded
+    integer :: r, c, d
+    if (is_root()) then
+      print '(a)', '| coupling | cells | D/dx | a/L | T / (8 pi mu a^3 Omega) | steps | wall s |'
+      print '(a)', '|---|---|---|---|---|---|---|'
+    end if
+    do r = 1, size(resolutions)
+      do c = 1, size(couplings)
+        if (.not. chosen(real(resolutions(r), wp), couplings(c), only_diameter, only_coupling)) cycle
+        do d = 1, 3
+          case%rotating = .true.
+          case%coupling = couplings(c)
+          case%cells = resolutions(r) * (d + 1)
+          case%volume_fraction = acos(-1.0_wp) / 6.0_wp / real(d + 1, wp)**3
+          case%max_steps = 40000
+          call run_sphere_array(case, result)
+          x(d) = result%radius_over_box**3
+          y(d) = -result%torque(3) / result%stokes_torque
+          if (is_root()) print '(a,a,a,i0,a,f5.2,a,f6.4,a,f8.5,a,i0,a,f6.1,a,a)', '| ', trim(couplings(c)), ' | ', &
+              case%cells, '^3 | ', result%diameter_cells, ' | ', result%radius_over_box, ' | ', y(d), ' | ', &
+              result%steps, ' | ', result%wall_seconds, merge(' |         ', ' unsteady |', result%steady)
+        end do
+        slope = (sum(x * y) - sum(x) * sum(y) / 3) / (sum(x**2) - sum(x)**2 / 3)
+        unbounded = (sum(y) - slope * sum(x)) / 3
+        if (is_root()) print '(a,a,a,i0,a,f8.5,a,f7.2,a,f5.2,a)', '|   | ', trim(couplings(c)), ', D/dx = ', &
+            resolutions(r), ': extrapolated to a/L = 0: ', unbounded, ' (error ', 100 * (unbounded - 1), &
+            '%), slope ', slope, ' |'
+      end do
+    end do
+    if (is_root()) print '(a)', ''
+  end subroutine rotating_table
+
+  !> Ghost-row sweeps for random needles and disks.
+  subroutine sweep_table()
+    type(sweep_survey_t) :: survey
+    ! Volume-equivalent radius 0.1 mm at 64^3 to 256^3, then the paper's 50 um at 128^3 and 256^3.
+    integer, parameter :: grids(5) = [64, 128, 256, 128, 256], placements(5) = [16, 8, 4, 8, 4]
+    real(wp), parameter :: radii(5) = [0.1e-3_wp, 0.1e-3_wp, 0.1e-3_wp, 0.05e-3_wp, 0.05e-3_wp]
+    character(len=8), parameter :: shapes(2) = [character(len=8) :: 'needle', 'disk']
+    integer :: g, s
+    if (is_root()) then
+      print '(a)', '| shape | r, mm | cells | thin dimension, cells | placements | ghosts per placement | ' // &
+          'sweeps mean/max | residual max | classification s | imposition s |'
+      print '(a)', '|---|---|---|---|---|---|---|---|---|---|'
+    end if
+    do g = 1, size(grids)
+      do s = 1, size(shapes)
+        survey%shape = shapes(s)
+        survey%cells = grids(g)
+        survey%placements = placements(g)
+        survey%radius = radii(g)
+        call run_sweep_survey(survey)
+        if (is_root()) print '(a,a,a,f5.3,a,i0,a,f5.2,a,i0,a,f8.0,a,f4.1,a,i0,a,es8.1,a,f7.3,a,f7.3,a)', '| ', &
+            trim(shapes(s)), ' | ', 1.0e3_wp * radii(g), ' | ', grids(g), '^3 | ', survey%thin_cells, ' | ', &
+            survey%placements, ' | ', &
+            survey%mean_ghosts, ' | ', survey%mean_sweeps, '/', survey%max_sweeps, ' | ', survey%max_residual, &
+            ' | ', survey%classify_seconds, ' | ', survey%impose_seconds, ' |'
+      end do
+    end do
+    if (is_root()) print '(a)', ''
+  end subroutine sweep_table
 end program bench_immersed_ladder
