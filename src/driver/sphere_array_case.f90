@@ -12,6 +12,13 @@
 !> With rotating = .true. the sphere instead turns at Omega about z in fluid without drive, and the
 !> result is the steady torque, to compare with 8 pi mu a^3 Omega (Stokes, unbounded) after the
 !> box-size extrapolation (the periodic images' correction falls as (a/L)^3).
+!>
+!> shape = 'needle' or 'disk' (aspect 5) places a spheroid of volume-equivalent radius radius_cells
+!> with its symmetry axis along `axis` (lab frame), driven along x (translation) or turning about
+!> rotation_axis (rotating). The geometry stays frozen at the initial orientation (no
+!> reclassification; the rigid velocity Omega x r is imposed on it): the torque is the
+!> instantaneous Stokes resistance of that orientation (Omega r = 1e-7 m/s would turn the body by
+!> only about 1e-3 rad over a run anyway).
 module sphere_array_case
   use agglo_kinds, only: wp
   use physical_constants, only: pi
@@ -21,6 +28,7 @@ module sphere_array_case
   use config_fluid, only: fluid_config_t
   use fluid_solver, only: fluid_solver_t, fluid_solver_create
   use spheroid, only: make_spheroid
+  use quaternion, only: quaternion_from_axis_angle
   use immersed_boundary, only: ibm_settings_t
   use immersed_scene, only: prescribed_motion_t, immersed_scene_t, immersed_scene_create, immersed_step
   implicit none
@@ -37,6 +45,10 @@ module sphere_array_case
     real(wp) :: offset_cells(3) = [0.13_wp, 0.27_wp, 0.41_wp]   !< sphere centre - box centre, cells
     real(wp) :: ghost_tolerance = 1.0e-12_wp
     logical :: rotating = .false.                !< rotating sphere, no drive, steady torque
+    character(len=8) :: shape = 'sphere'         !< 'sphere', or 'needle' / 'disk' of aspect 5
+    real(wp) :: radius_cells = 0                 !< volume-equivalent radius in cells (0: from volume_fraction)
+    real(wp) :: axis(3) = [1.0_wp, 0.0_wp, 0.0_wp]            !< symmetry axis in the lab frame
+    real(wp) :: rotation_axis(3) = [0.0_wp, 0.0_wp, 1.0_wp]   !< direction of Omega (rotating)
   end type sphere_array_case_t
 
   type :: sphere_array_result_t
@@ -47,7 +59,10 @@ module sphere_array_case
     real(wp) :: drive(3) = 0               !< N, f L^3
     real(wp) :: torque(3) = 0              !< N m, momentum-balance torque of the last step
     real(wp) :: stokes_torque = 0          !< N m, 8 pi mu a^3 Omega (rotating case)
-    real(wp) :: radius_over_box = 0        !< a / L
+    real(wp) :: radius_over_box = 0        !< a / L (r / L for a spheroid, r volume-equivalent)
+    real(wp) :: radius = 0                 !< m, a (r)
+    real(wp) :: angular_speed = 0          !< rad/s, |Omega| (rotating)
+    real(wp) :: dynamic_viscosity = 0      !< Pa s
     integer :: steps = 0
     logical :: steady = .false.
     integer :: max_sweeps = 0              !< most sweeps of an imposition on u*
@@ -72,7 +87,7 @@ contains
     type(immersed_scene_t) :: scene
     type(prescribed_motion_t) :: motion(1)
     type(ibm_settings_t) :: settings
-    real(wp) :: radius, dt, u_old, u_new, t0, sweeps_total, drive_x
+    real(wp) :: radius, dt, u_old, u_new, t0, sweeps_total, drive_x, axis(3), turn(3)
     integer :: step
 
     t0 = wall_time()
@@ -85,7 +100,13 @@ contains
     solver%u = 0; solver%v = 0; solver%w = 0; solver%pressure = 0
 
     radius = (3.0_wp * case%volume_fraction / (4.0_wp * pi))**(1.0_wp / 3.0_wp) * box
-    motion(1)%shape = make_spheroid('sphere', radius, density)
+    if (case%radius_cells > 0) radius = case%radius_cells * solver%grid%dx
+    motion(1)%shape = make_spheroid(trim(case%shape), radius, density)
+    ! Body x (the symmetry axis) onto `axis`: the rotation about e_x x axis.
+    axis = case%axis / norm2(case%axis)
+    turn = [0.0_wp, -axis(3), axis(2)]
+    if (norm2(turn) > 1.0e-12_wp) motion(1)%orientation = quaternion_from_axis_angle(turn / norm2(turn), &
+                                                                                  acos(max(-1.0_wp, min(1.0_wp, axis(1)))))
     motion(1)%centre = 0.5_wp * box + case%offset_cells * solver%grid%dx
     settings%coupling = case%coupling
     settings%tolerance = case%ghost_tolerance
@@ -95,9 +116,11 @@ contains
     if (case%rotating) then
       drive_x = 0
       ! Omega a = 1e-7 m/s: Re = Omega a^2 / nu below 1e-4.
-      motion(1)%angular_velocity = [0.0_wp, 0.0_wp, 1.0e-7_wp / radius]
+      motion(1)%angular_velocity = case%rotation_axis / norm2(case%rotation_axis) * 1.0e-7_wp / radius
     end if
     call immersed_scene_create(scene, solver, motion, settings, [drive_x, 0.0_wp, 0.0_wp])
+    ! The centre never moves; a turning spheroid keeps its initial classification (frozen geometry).
+    scene%moving = .false.
 
     dt = case%viscous_number * solver%grid%dx**2 / viscosity
     u_old = 0
@@ -107,7 +130,7 @@ contains
       result%max_sweeps = max(result%max_sweeps, scene%predicted%sweeps)
       sweeps_total = sweeps_total + scene%predicted%sweeps
       if (case%rotating) then
-        u_new = scene%torque(3, 1)
+        u_new = dot_product(scene%torque(:, 1), case%rotation_axis) / norm2(case%rotation_axis)
       else
         u_new = global_sum(sum(solver%u(solver%grid%nx, 1:solver%grid%ny, 1:solver%grid%nz_local))) / &
                 real(solver%grid%ny * solver%grid%nz, wp)
@@ -121,6 +144,9 @@ contains
     end do
     result%torque = scene%torque(:, 1)
     result%stokes_torque = 8.0_wp * pi * density * viscosity * radius**3 * motion(1)%angular_velocity(3)
+    result%radius = radius
+    result%angular_speed = norm2(motion(1)%angular_velocity)
+    result%dynamic_viscosity = density * viscosity
     result%radius_over_box = radius / box
     result%superficial_velocity = u_new
     result%diameter_cells = 2.0_wp * radius / solver%grid%dx

@@ -1,6 +1,7 @@
 !> The immersed-boundary validation ladder (make validate; docs/validation.md, "Immersed boundary"),
 !> as Markdown tables. Each table is a section; the command-line arguments choose sections (none: all),
-!> and a section may be narrowed as section:D/dx:coupling, e.g. `rotating:16:implicit`.
+!> and a section may be narrowed as section:D/dx:coupling, e.g. `rotating:16:implicit` or
+!> `dilute::explicit`.
 !> - arrays: simple-cubic sphere arrays in Stokes flow at D/dx about 8, 12 and 16, for phi = 0.125 and
 !>   0.064, implicit and explicit coupling, against Zick & Homsy (1982, J. Fluid Mech. 115, 13,
 !>   Table 2: K = 4.292 at phi = 0.125, 2.810 at phi = 0.064), with the observed order of
@@ -17,6 +18,8 @@ program bench_immersed_ladder
   use parallel_env, only: parallel_start, parallel_stop, is_root
   use sphere_array_case, only: sphere_array_case_t, sphere_array_result_t, run_sphere_array
   use immersed_sweep_survey, only: sweep_survey_t, run_sweep_survey
+  use stokes_resistance, only: spheroid_resistance_coefficients
+  use spheroid, only: make_spheroid, spheroid_t
   implicit none
   character(len=8), parameter :: couplings(2) = [character(len=8) :: 'implicit', 'explicit']
   character(len=64) :: argument
@@ -28,6 +31,7 @@ program bench_immersed_ladder
     call run_section('dilute')
     call run_section('rotating')
     call run_section('sweeps')
+    call run_section('spheroids')
   else
     do a = 1, command_argument_count()
       call get_command_argument(a, argument)
@@ -57,8 +61,13 @@ contains
       else
         second = len_trim(spec) + 1
       end if
-      read(spec(first + 1:second - 1), *, iostat=status) only_diameter
-      if (status /= 0) only_diameter = -1
+      if (second - 1 > first) then
+        read(spec(first + 1:second - 1), *, iostat=status) only_diameter
+        if (status /= 0) then
+          if (is_root()) print '(a)', 'bench_immersed_ladder: '''//trim(spec)//''': D/dx is not a number'
+          error stop 1
+        end if
+      end if
     end if
     select case (trim(name))
     case ('arrays')
@@ -70,9 +79,11 @@ contains
       call rotating_table([8, 12, 16], only_diameter, only_coupling)
     case ('sweeps')
       call sweep_table()
+    case ('spheroids')
+      call spheroid_table(only_coupling)
     case default
       if (is_root()) print '(a)', 'bench_immersed_ladder: unknown section '''//trim(spec)// &
-          '''; allowed: arrays, dilute, rotating, sweeps (each optionally :D/dx:coupling)'
+          '''; allowed: arrays, dilute, rotating, sweeps, spheroids (each optionally :D/dx:coupling)'
       error stop 1
     end select
   end subroutine run_section
@@ -106,6 +117,7 @@ contains
           case%coupling = couplings(c)
           case%cells = nint(diameters(d) / (6.0_wp * fractions(f) / acos(-1.0_wp))**(1.0_wp / 3.0_wp))
           case%max_steps = 80000
+          if (fractions(f) < 0.05_wp) case%steady_tolerance = 1.0e-8_wp
           call run_sphere_array(case, result)
           errors(d) = result%drag_coefficient / references(f) - 1.0_wp
           sizes(d) = result%diameter_cells
@@ -191,4 +203,83 @@ contains
     end do
     if (is_root()) print '(a)', ''
   end subroutine sweep_table
+  !> Needle and disk (aspect 5, 4.4 cells thin) translating along and across the axis (fixed body,
+  !> driven box, F = f L^3 against the superficial velocity U) and rotating about and across it, in
+  !> boxes of 32^3 and 40^3, against Oberbeck/Perrin (stokes_resistance). Translation: the periodic
+  !> array's mobility is 6 pi mu r U/F = 1/c - 2.837 r/L + C (r/L)^3 (Hasimoto 1959, J. Fluid Mech.
+  !> 5, 317: the O(1/L) term does not depend on the body's shape), solved for c and C from the two
+  !> boxes. Rotation: a line in (r/L)^3 through the two boxes. Torque of the translating body over
+  !> F r (symmetry), at the offset of the tables and with the centre on a grid symmetry point.
+  subroutine spheroid_table(only_coupling)
+    character(len=*), intent(in) :: only_coupling
+    character(len=8), parameter :: shapes(2) = [character(len=8) :: 'needle', 'disk']
+    character(len=16), parameter :: motions(4) = [character(len=16) :: 'translate along', 'translate across', &
+                                                  'rotate about', 'rotate across']
+    integer, parameter :: boxes(2) = [32, 40]
+    real(wp), parameter :: thin_cells = 4.4_wp, hasimoto = 2.837_wp
+    type(sphere_array_case_t) :: case
+    type(sphere_array_result_t) :: result
+    type(spheroid_t) :: unit_shape
+    real(wp) :: reference(4), x(2), y(2), expected, measured, extrapolated, cubic, torque_ratio, r
+    integer :: s, m, b, c
+    if (is_root()) then
+      print '(a)', '| shape | motion | coupling | cells | r/dx | r/L | raw coefficient | Oberbeck/Perrin | ' // &
+          'torque/(F r) | steps | wall s |'
+      print '(a)', '|---|---|---|---|---|---|---|---|---|---|---|'
+    end if
+    do c = 1, size(couplings)
+      if (len_trim(only_coupling) > 0 .and. trim(couplings(c)) /= trim(only_coupling)) cycle
+      do s = 1, size(shapes)
+        unit_shape = make_spheroid(trim(shapes(s)), 1.0_wp, 1.0_wp)
+        reference = spheroid_resistance_coefficients(unit_shape%a, unit_shape%b)
+        do m = 1, size(motions)
+          expected = reference(m)
+          do b = 1, size(boxes)
+            case = sphere_array_case_t()
+            case%coupling = couplings(c)
+            case%shape = shapes(s)
+            case%cells = boxes(b)
+            case%radius_cells = thin_cells / (2.0_wp * min(unit_shape%a, unit_shape%b))
+            case%steady_tolerance = 1.0e-7_wp
+            case%max_steps = 60000
+            case%rotating = m >= 3
+            case%axis = [1.0_wp, 0.0_wp, 0.0_wp]
+            if (m == 2) case%axis = [0.0_wp, 1.0_wp, 0.0_wp]
+            case%rotation_axis = [1.0_wp, 0.0_wp, 0.0_wp]
+            if (m == 4) case%rotation_axis = [0.0_wp, 0.0_wp, 1.0_wp]
+            call run_sphere_array(case, result)
+            r = result%radius
+            x(b) = result%radius_over_box
+            torque_ratio = 0
+            if (m <= 2) then
+              measured = result%drive(1) / (6.0_wp * acos(-1.0_wp) * result%dynamic_viscosity * r * &
+                                            result%superficial_velocity)
+              torque_ratio = norm2(result%torque) / (result%drive(1) * r)
+              y(b) = 1.0_wp / measured
+            else
+              measured = -dot_product(result%torque, case%rotation_axis) / &
+                         (8.0_wp * acos(-1.0_wp) * result%dynamic_viscosity * r**3 * result%angular_speed)
+              y(b) = measured
+            end if
+            if (is_root()) print '(a,a,a,a,a,a,a,i0,a,f5.2,a,f6.4,a,f7.4,a,f7.4,a,es8.1,a,i0,a,f6.1,a,a)', '| ', &
+                trim(shapes(s)), ' | ', trim(motions(m)), ' | ', trim(couplings(c)), ' | ', boxes(b), '^3 | ', &
+                case%radius_cells, ' | ', x(b), ' | ', measured, ' | ', expected, ' | ', torque_ratio, ' | ', &
+                result%steps, ' | ', result%wall_seconds, merge(' |         ', ' unsteady |', result%steady)
+          end do
+          if (m <= 2) then
+            ! y = 1/c - hasimoto x + C x^3 through both boxes.
+            cubic = ((y(1) + hasimoto * x(1)) - (y(2) + hasimoto * x(2))) / (x(1)**3 - x(2)**3)
+            extrapolated = 1.0_wp / (y(1) + hasimoto * x(1) - cubic * x(1)**3)
+          else
+            cubic = (y(1) - y(2)) / (x(1)**3 - x(2)**3)
+            extrapolated = y(1) - cubic * x(1)**3
+          end if
+          if (is_root()) print '(a,a,a,a,a,a,a,f7.4,a,f7.4,a,f6.2,a,f7.2,a)', '|   | ', trim(shapes(s)), ', ', &
+              trim(motions(m)), ', ', trim(couplings(c)), ': extrapolated ', extrapolated, ' against ', expected, &
+              ' (error ', 100 * (extrapolated / expected - 1), '%), (r/L)^3 coefficient ', cubic, ' |'
+        end do
+      end do
+    end do
+    if (is_root()) print '(a)', ''
+  end subroutine spheroid_table
 end program bench_immersed_ladder
