@@ -267,6 +267,14 @@ contains
                 result%steps, ' | ', result%wall_seconds, merge(' |         ', ' unsteady |', result%steady)
           end do
           if (m <= 2) then
+            ! Symmetry: the same body with its centre on a grid symmetry point (a cell-face corner).
+            case%cells = boxes(1)
+            case%offset_cells = 0
+            call run_sphere_array(case, result)
+            if (is_root()) print '(a,a,a,a,a,i0,a,es8.1,a,i0,a,f6.1,a)', '|   | ', trim(shapes(s)), ', ', &
+                trim(motions(m)), ', centre on a grid symmetry point, ', boxes(1), '^3: torque/(F r) ', &
+                norm2(result%torque) / (result%drive(1) * result%radius), ', ', result%steps, ' steps, ', &
+                result%wall_seconds, ' s |'
             ! y = 1/c - hasimoto x + C x^3 through both boxes.
             cubic = ((y(1) + hasimoto * x(1)) - (y(2) + hasimoto * x(2))) / (x(1)**3 - x(2)**3)
             extrapolated = 1.0_wp / (y(1) + hasimoto * x(1) - cubic * x(1)**3)
