@@ -7,7 +7,14 @@
 !> area (Zick & Homsy 1982, J. Fluid Mech. 115, 13, Table 2: K = 2.810 at phi = 0.064, 4.292 at
 !> phi = 0.125; ibm-notes section 5.1). U is measured on the x-face plane at the box edge, which the
 !> sphere (diameter below the box) never cuts.
-!> Steady state: the relative change of U per step below steady_tolerance.
+!> Steady state: the relative change of U per step below steady_tolerance. With aitken_window > 0
+!> (translation only) the run stops earlier: the slowest mode of a dilute array is the spin-up of
+!> the mean flow against the body's drag, a single exponential of time constant about
+!> rho L^3 / (6 pi mu r c) (5000 steps at 32^3 for the needles of the ladder), far slower than the
+!> diffusive modes. Once those have decayed, Aitken's delta-squared on U sampled every window
+!> steps, U_inf = U3 - (U3 - U2)^2 / ((U3 - U2) - (U2 - U1)), removes it; the run stops when two
+!> successive estimates agree to aitken_tolerance, and U (and the loads, which follow U
+!> quasi-steadily) are scaled to U_inf.
 !>
 !> With rotating = .true. the sphere instead turns at Omega about z in fluid without drive, and the
 !> result is the steady torque, to compare with 8 pi mu a^3 Omega (Stokes, unbounded) after the
@@ -49,6 +56,8 @@ module sphere_array_case
     real(wp) :: radius_cells = 0                 !< volume-equivalent radius in cells (0: from volume_fraction)
     real(wp) :: axis(3) = [1.0_wp, 0.0_wp, 0.0_wp]            !< symmetry axis in the lab frame
     real(wp) :: rotation_axis(3) = [0.0_wp, 0.0_wp, 1.0_wp]   !< direction of Omega (rotating)
+    integer :: aitken_window = 0                 !< steps between the samples of U (0: run to steady)
+    real(wp) :: aitken_tolerance = 1.0e-6_wp     !< relative change of successive Aitken estimates
   end type sphere_array_case_t
 
   type :: sphere_array_result_t
@@ -65,6 +74,7 @@ module sphere_array_case
     real(wp) :: dynamic_viscosity = 0      !< Pa s
     integer :: steps = 0
     logical :: steady = .false.
+    logical :: extrapolated = .false.      !< stopped by the Aitken estimate (U and loads scaled to it)
     integer :: max_sweeps = 0              !< most sweeps of an imposition on u*
     real(wp) :: mean_sweeps = 0            !< mean sweeps per imposition on u*
     real(wp) :: slip = 0                   !< last re-imposition's largest change / velocity scale
@@ -88,6 +98,7 @@ contains
     type(prescribed_motion_t) :: motion(1)
     type(ibm_settings_t) :: settings
     real(wp) :: radius, dt, u_old, u_new, t0, sweeps_total, drive_x, axis(3), turn(3)
+    real(wp) :: samples(3), estimate, previous_estimate, scale
     integer :: step
 
     t0 = wall_time()
@@ -125,6 +136,9 @@ contains
     dt = case%viscous_number * solver%grid%dx**2 / viscosity
     u_old = 0
     sweeps_total = 0
+    samples = 0
+    previous_estimate = 0
+    scale = 1
     do step = 1, case%max_steps
       call immersed_step(scene, solver, dt)
       result%max_sweeps = max(result%max_sweeps, scene%predicted%sweeps)
@@ -141,8 +155,23 @@ contains
         exit
       end if
       u_old = u_new
+      if (case%aitken_window > 0 .and. .not. case%rotating .and. mod(step, max(case%aitken_window, 1)) == 0) then
+        samples = [samples(2), samples(3), u_new]
+        if (step >= 3 * case%aitken_window .and. abs((samples(3) - samples(2)) - (samples(2) - samples(1))) > 0) then
+          estimate = samples(3) - (samples(3) - samples(2))**2 / ((samples(3) - samples(2)) - (samples(2) - samples(1)))
+          if (step >= 4 * case%aitken_window .and. &
+              abs(estimate - previous_estimate) <= case%aitken_tolerance * abs(estimate)) then
+            result%steady = .true.
+            result%extrapolated = .true.
+            scale = estimate / u_new
+            u_new = estimate
+            exit
+          end if
+          previous_estimate = estimate
+        end if
+      end if
     end do
-    result%torque = scene%torque(:, 1)
+    result%torque = scale * scene%torque(:, 1)
     result%stokes_torque = 8.0_wp * pi * density * viscosity * radius**3 * motion(1)%angular_velocity(3)
     result%radius = radius
     result%angular_speed = norm2(motion(1)%angular_velocity)
@@ -152,7 +181,7 @@ contains
     result%diameter_cells = 2.0_wp * radius / solver%grid%dx
     result%drive = [drive * box**3, 0.0_wp, 0.0_wp]
     result%drag_coefficient = drive * box**3 / (6.0_wp * pi * density * viscosity * radius * u_new)
-    result%force = scene%force(:, 1)
+    result%force = scale * scene%force(:, 1)
     result%mean_sweeps = sweeps_total / result%steps
     result%slip = scene%projected%largest_change
     result%divergence = scene%divergence

@@ -210,6 +210,8 @@ contains
   !> 5, 317: the O(1/L) term does not depend on the body's shape), solved for c and C from the two
   !> boxes. Rotation: a line in (r/L)^3 through the two boxes. Torque of the translating body over
   !> F r (symmetry), at the offset of the tables and with the centre on a grid symmetry point.
+  !> Translation stops on the Aitken estimate of U (sphere_array_case, aitken_window), rotation when
+  !> the torque changes by less than 1e-7 per step (the remaining error is below 1e-4).
   subroutine spheroid_table(only_coupling)
     character(len=*), intent(in) :: only_coupling
     character(len=8), parameter :: shapes(2) = [character(len=8) :: 'needle', 'disk']
@@ -241,6 +243,7 @@ contains
             case%cells = boxes(b)
             case%radius_cells = thin_cells / (2.0_wp * min(unit_shape%a, unit_shape%b))
             case%steady_tolerance = 1.0e-7_wp
+            case%aitken_window = 1000
             case%max_steps = 60000
             case%rotating = m >= 3
             case%axis = [1.0_wp, 0.0_wp, 0.0_wp]
