@@ -32,6 +32,7 @@ program bench_immersed_ladder
     call run_section('rotating')
     call run_section('sweeps')
     call run_section('spheroids')
+    call run_section('spheroids:6')
   else
     do a = 1, command_argument_count()
       call get_command_argument(a, argument)
@@ -80,10 +81,12 @@ contains
     case ('sweeps')
       call sweep_table()
     case ('spheroids')
-      call spheroid_table(only_coupling)
+      ! spheroids:T: thinnest dimension T cells (default 4.4), the boxes scaled with it.
+      call spheroid_table(merge(4.4_wp, only_diameter, only_diameter <= 0), only_coupling)
     case default
       if (is_root()) print '(a)', 'bench_immersed_ladder: unknown section '''//trim(spec)// &
-          '''; allowed: arrays, dilute, rotating, sweeps, spheroids (each optionally :D/dx:coupling)'
+          '''; allowed: arrays, dilute, rotating, sweeps, spheroids (each optionally :D/dx:coupling; ' // &
+          'for spheroids :thin cells:coupling)'
       error stop 1
     end select
   end subroutine run_section
@@ -203,27 +206,29 @@ contains
     end do
     if (is_root()) print '(a)', ''
   end subroutine sweep_table
-  !> Needle and disk (aspect 5, 4.4 cells thin) translating along and across the axis (fixed body,
-  !> driven box, F = f L^3 against the superficial velocity U) and rotating about and across it, in
-  !> boxes of 32^3 and 40^3, against Oberbeck/Perrin (stokes_resistance). Translation: the periodic
+  !> Needle and disk (aspect 5, thin_cells thin: 4.4 by default) translating along and across the
+  !> axis (fixed body, driven box, F = f L^3 against the superficial velocity U) and rotating about
+  !> and across it, in boxes of 32^3 and 40^3 (scaled with thin_cells/4.4), against Oberbeck/Perrin (stokes_resistance). Translation: the periodic
   !> array's mobility is 6 pi mu r U/F = 1/c - 2.837 r/L + C (r/L)^3 (Hasimoto 1959, J. Fluid Mech.
   !> 5, 317: the O(1/L) term does not depend on the body's shape), solved for c and C from the two
   !> boxes. Rotation: a line in (r/L)^3 through the two boxes. Torque of the translating body over
   !> F r (symmetry), at the offset of the tables and with the centre on a grid symmetry point.
   !> Translation stops on the Aitken estimate of U (sphere_array_case, aitken_window), rotation when
   !> the torque changes by less than 1e-7 per step (the remaining error is below 1e-4).
-  subroutine spheroid_table(only_coupling)
+  subroutine spheroid_table(thin_cells, only_coupling)
+    real(wp), intent(in) :: thin_cells
     character(len=*), intent(in) :: only_coupling
     character(len=8), parameter :: shapes(2) = [character(len=8) :: 'needle', 'disk']
     character(len=16), parameter :: motions(4) = [character(len=16) :: 'translate along', 'translate across', &
                                                   'rotate about', 'rotate across']
-    integer, parameter :: boxes(2) = [32, 40]
-    real(wp), parameter :: thin_cells = 4.4_wp, hasimoto = 2.837_wp
+    real(wp), parameter :: hasimoto = 2.837_wp
+    integer :: boxes(2)
     type(sphere_array_case_t) :: case
     type(sphere_array_result_t) :: result
     type(spheroid_t) :: unit_shape
     real(wp) :: reference(4), x(2), y(2), expected, measured, extrapolated, cubic, torque_ratio, r
     integer :: s, m, b, c
+    boxes = nint([32.0_wp, 40.0_wp] * thin_cells / 4.4_wp)
     if (is_root()) then
       print '(a)', '| shape | motion | coupling | cells | r/dx | r/L | raw coefficient | Oberbeck/Perrin | ' // &
           'torque/(F r) | steps | wall s |'
