@@ -211,10 +211,11 @@ contains
   !> and across it, in boxes of 32^3 and 40^3 (scaled with thin_cells/4.4), against Oberbeck/Perrin
   !> (stokes_resistance). Translation: the periodic array's mobility is
   !> 6 pi mu r U/F = 1/c - 2.837 r/L + C (r/L)^3 (Hasimoto 1959, J. Fluid Mech. 5, 317: the O(1/L)
-  !> term does not depend on the body's shape), solved for c and C from the two boxes. Rotation: a line in (r/L)^3 through the two boxes. Torque of the translating body over
-  !> F r (symmetry), at the offset of the tables and with the centre on a grid symmetry point.
-  !> Translation stops on the Aitken estimate of U (sphere_array_case, aitken_window), rotation when
-  !> the torque changes by less than 1e-7 per step (the remaining error is below 1e-4).
+  !> term does not depend on the body's shape), solved for c and C from the two boxes. Rotation: a
+  !> line in (r/L)^3 through the two boxes. Torque of the translating body over F r (symmetry), at
+  !> the offset of the tables and with the centre on a grid symmetry point. Translation stops on the
+  !> Aitken estimate of U (sphere_array_case, aitken_window), rotation when the torque changes by
+  !> less than 1e-7 per step (the remaining error is below 1e-4).
   subroutine spheroid_table(thin_cells, only_coupling)
     real(wp), intent(in) :: thin_cells
     character(len=*), intent(in) :: only_coupling
