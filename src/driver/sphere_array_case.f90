@@ -7,11 +7,25 @@
 !> area (Zick & Homsy 1982, J. Fluid Mech. 115, 13, Table 2: K = 2.810 at phi = 0.064, 4.292 at
 !> phi = 0.125; ibm-notes section 5.1). U is measured on the x-face plane at the box edge, which the
 !> sphere (diameter below the box) never cuts.
-!> Steady state: the relative change of U per step below steady_tolerance.
+!> Steady state: the relative change of U per step below steady_tolerance. With aitken_window > 0
+!> (translation only) the run stops earlier: the slowest mode of a dilute array is the spin-up of
+!> the mean flow against the body's drag, a single exponential of time constant about
+!> rho L^3 / (6 pi mu r c) (5000 steps at 32^3 for the needles of the ladder), far slower than the
+!> diffusive modes. Once those have decayed, Aitken's delta-squared on U sampled every window
+!> steps, U_inf = U3 - (U3 - U2)^2 / ((U3 - U2) - (U2 - U1)), removes it; the run stops when two
+!> successive estimates agree to aitken_tolerance, and U (and the loads, which follow U
+!> quasi-steadily) are scaled to U_inf.
 !>
 !> With rotating = .true. the sphere instead turns at Omega about z in fluid without drive, and the
 !> result is the steady torque, to compare with 8 pi mu a^3 Omega (Stokes, unbounded) after the
 !> box-size extrapolation (the periodic images' correction falls as (a/L)^3).
+!>
+!> shape = 'needle' or 'disk' (aspect 5) places a spheroid of volume-equivalent radius radius_cells
+!> with its symmetry axis along `axis` (lab frame), driven along x (translation) or turning about
+!> rotation_axis (rotating). The geometry stays frozen at the initial orientation (no
+!> reclassification; the rigid velocity Omega x r is imposed on it): the torque is the
+!> instantaneous Stokes resistance of that orientation (Omega r = 1e-7 m/s would turn the body by
+!> only about 1e-3 rad over a run anyway).
 module sphere_array_case
   use agglo_kinds, only: wp
   use physical_constants, only: pi
@@ -22,6 +36,7 @@ module sphere_array_case
   use fluid_solver, only: fluid_solver_t, fluid_solver_create
   use spheroid, only: make_spheroid
   use icosphere_mesh, only: build_icosphere_mesh
+  use quaternion, only: quaternion_from_axis_angle
   use immersed_boundary, only: ibm_settings_t
   use hypre_solver, only: linear_solver_config_t
   use immersed_scene, only: prescribed_motion_t, immersed_scene_t, immersed_scene_create, immersed_step
@@ -44,6 +59,12 @@ module sphere_array_case
     character(len=16) :: viscous_scheme = 'explicit'   !< or 'crank_nicolson' (the predictor with the body rows)
     type(linear_solver_config_t) :: predictor = linear_solver_config_t(method='bicgstab', preconditioner='user', &
                                                                        tolerance=1.0e-8_wp, max_iterations=200)
+    character(len=8) :: shape = 'sphere'         !< 'sphere', or 'needle' / 'disk' of aspect 5
+    real(wp) :: radius_cells = 0                 !< volume-equivalent radius in cells (0: from volume_fraction)
+    real(wp) :: axis(3) = [1.0_wp, 0.0_wp, 0.0_wp]            !< symmetry axis in the lab frame
+    real(wp) :: rotation_axis(3) = [0.0_wp, 0.0_wp, 1.0_wp]   !< direction of Omega (rotating)
+    integer :: aitken_window = 0                 !< steps between the samples of U (0: run to steady)
+    real(wp) :: aitken_tolerance = 1.0e-6_wp     !< relative change of successive Aitken estimates
   end type sphere_array_case_t
 
   type :: sphere_array_result_t
@@ -56,9 +77,13 @@ module sphere_array_case
     real(wp) :: surface_force(3) = 0       !< N, face-sum load of the last step (immersed_surface_loads)
     real(wp) :: surface_torque(3) = 0      !< N m, face-sum torque of the last step
     real(wp) :: stokes_torque = 0          !< N m, 8 pi mu a^3 Omega (rotating case)
-    real(wp) :: radius_over_box = 0        !< a / L
+    real(wp) :: radius_over_box = 0        !< a / L (r / L for a spheroid, r volume-equivalent)
+    real(wp) :: radius = 0                 !< m, a (r)
+    real(wp) :: angular_speed = 0          !< rad/s, |Omega| (rotating)
+    real(wp) :: dynamic_viscosity = 0      !< Pa s
     integer :: steps = 0
     logical :: steady = .false.
+    logical :: extrapolated = .false.      !< stopped by the Aitken estimate (U and loads scaled to it)
     integer :: max_sweeps = 0              !< most sweeps of an imposition on u*
     real(wp) :: mean_sweeps = 0            !< mean sweeps per imposition on u*
     real(wp) :: slip = 0                   !< last re-imposition's largest change / velocity scale
@@ -81,7 +106,8 @@ contains
     type(immersed_scene_t) :: scene
     type(prescribed_motion_t) :: motion(1)
     type(ibm_settings_t) :: settings
-    real(wp) :: radius, dt, u_old, u_new, t0, sweeps_total, drive_x
+    real(wp) :: radius, dt, u_old, u_new, t0, sweeps_total, drive_x, axis(3), turn(3)
+    real(wp) :: samples(3), estimate, previous_estimate, scale
     integer :: step
 
     t0 = wall_time()
@@ -94,7 +120,13 @@ contains
     solver%u = 0; solver%v = 0; solver%w = 0; solver%pressure = 0
 
     radius = (3.0_wp * case%volume_fraction / (4.0_wp * pi))**(1.0_wp / 3.0_wp) * box
-    motion(1)%shape = make_spheroid('sphere', radius, density)
+    if (case%radius_cells > 0) radius = case%radius_cells * solver%grid%dx
+    motion(1)%shape = make_spheroid(trim(case%shape), radius, density)
+    ! Body x (the symmetry axis) onto `axis`: the rotation about e_x x axis.
+    axis = case%axis / norm2(case%axis)
+    turn = [0.0_wp, -axis(3), axis(2)]
+    if (norm2(turn) > 1.0e-12_wp) motion(1)%orientation = quaternion_from_axis_angle(turn / norm2(turn), &
+                                                                                  acos(max(-1.0_wp, min(1.0_wp, axis(1)))))
     motion(1)%centre = 0.5_wp * box + case%offset_cells * solver%grid%dx
     if (case%mesh_level >= 0) call build_icosphere_mesh(motion(1)%shape, case%mesh_level, motion(1)%mesh)
     settings%coupling = case%coupling
@@ -105,20 +137,25 @@ contains
     if (case%rotating) then
       drive_x = 0
       ! Omega a = 1e-7 m/s: Re = Omega a^2 / nu below 1e-4.
-      motion(1)%angular_velocity = [0.0_wp, 0.0_wp, 1.0e-7_wp / radius]
+      motion(1)%angular_velocity = case%rotation_axis / norm2(case%rotation_axis) * 1.0e-7_wp / radius
     end if
     call immersed_scene_create(scene, solver, motion, settings, [drive_x, 0.0_wp, 0.0_wp], &
                                surface_level=case%surface_level, predictor_config=case%predictor)
+    ! The centre never moves; a turning spheroid keeps its initial classification (frozen geometry).
+    scene%moving = .false.
 
     dt = case%viscous_number * solver%grid%dx**2 / viscosity
     u_old = 0
     sweeps_total = 0
+    samples = 0
+    previous_estimate = 0
+    scale = 1
     do step = 1, case%max_steps
       call immersed_step(scene, solver, dt)
       result%max_sweeps = max(result%max_sweeps, scene%predicted%sweeps)
       sweeps_total = sweeps_total + scene%predicted%sweeps
       if (case%rotating) then
-        u_new = scene%torque(3, 1)
+        u_new = dot_product(scene%torque(:, 1), case%rotation_axis) / norm2(case%rotation_axis)
       else
         u_new = global_sum(sum(solver%u(solver%grid%nx, 1:solver%grid%ny, 1:solver%grid%nz_local))) / &
                 real(solver%grid%ny * solver%grid%nz, wp)
@@ -129,17 +166,35 @@ contains
         exit
       end if
       u_old = u_new
+      if (case%aitken_window > 0 .and. .not. case%rotating .and. mod(step, max(case%aitken_window, 1)) == 0) then
+        samples = [samples(2), samples(3), u_new]
+        if (step >= 3 * case%aitken_window .and. abs((samples(3) - samples(2)) - (samples(2) - samples(1))) > 0) then
+          estimate = samples(3) - (samples(3) - samples(2))**2 / ((samples(3) - samples(2)) - (samples(2) - samples(1)))
+          if (step >= 4 * case%aitken_window .and. &
+              abs(estimate - previous_estimate) <= case%aitken_tolerance * abs(estimate)) then
+            result%steady = .true.
+            result%extrapolated = .true.
+            scale = estimate / u_new
+            u_new = estimate
+            exit
+          end if
+          previous_estimate = estimate
+        end if
+      end if
     end do
-    result%torque = scene%torque(:, 1)
+    result%torque = scale * scene%torque(:, 1)
     result%stokes_torque = 8.0_wp * pi * density * viscosity * radius**3 * motion(1)%angular_velocity(3)
+    result%radius = radius
+    result%angular_speed = norm2(motion(1)%angular_velocity)
+    result%dynamic_viscosity = density * viscosity
     result%radius_over_box = radius / box
     result%superficial_velocity = u_new
     result%diameter_cells = 2.0_wp * radius / solver%grid%dx
     result%drive = [drive * box**3, 0.0_wp, 0.0_wp]
     result%drag_coefficient = drive * box**3 / (6.0_wp * pi * density * viscosity * radius * u_new)
-    result%force = scene%force(:, 1)
-    result%surface_force = scene%surface_force(:, 1)
-    result%surface_torque = scene%surface_torque(:, 1)
+    result%force = scale * scene%force(:, 1)
+    result%surface_force = scale * scene%surface_force(:, 1)
+    result%surface_torque = scale * scene%surface_torque(:, 1)
     result%mean_sweeps = sweeps_total / result%steps
     result%slip = scene%projected%largest_change
     result%divergence = scene%divergence

@@ -1,73 +1,302 @@
-!> The immersed-boundary validation ladder (make validate; docs/validation.md, "Immersed boundary"):
-!> simple-cubic sphere arrays in Stokes flow at D/dx about 8, 12 and 16, for phi = 0.125 and 0.064,
-!> implicit and explicit coupling, against Zick & Homsy (1982, J. Fluid Mech. 115, 13, Table 2:
-!> K = 4.292 at phi = 0.125, 2.810 at phi = 0.064), with the observed order of convergence between
-!> the coarsest and the finest grid, p = ln(e_8 / e_16) / ln(D_16 / D_8). Then a rotating sphere at
-!> D/dx = 8 and 12 in boxes L/D = 2, 3, 4: the torque -T (it opposes the rotation) extrapolated to
-!> the unbounded box by a least-squares line in (a/L)^3 against 8 pi mu a^3 Omega (Stokes).
-!> Prints Markdown tables.
+!> The immersed-boundary validation ladder (make validate; docs/validation.md, "Immersed boundary"),
+!> as Markdown tables. Each table is a section; the command-line arguments choose sections (none: all),
+!> and a section may be narrowed as section:D/dx:coupling, e.g. `rotating:16:implicit` or
+!> `dilute::explicit`.
+!> - arrays: simple-cubic sphere arrays in Stokes flow at D/dx about 8, 12 and 16, for phi = 0.125 and
+!>   0.064, implicit and explicit coupling, against Zick & Homsy (1982, J. Fluid Mech. 115, 13,
+!>   Table 2: K = 4.292 at phi = 0.125, 2.810 at phi = 0.064), with the observed order of
+!>   convergence between the coarsest and the finest grid, p = ln(e_8 / e_16) / ln(D_16 / D_8).
+!> - dilute: the same at phi = 0.027 (K = 2.008, Zick & Homsy Table 2; Sangani & Acrivos 1982,
+!>   Int. J. Multiphase Flow 8, 343, Eq. 4.11 gives 2.0077) at D/dx about 10, 12 and 16.
+!> - rotating: a rotating sphere at D/dx = 8, 12 and 16 in boxes L/D = 2, 3, 4: the torque -T (it
+!>   opposes the rotation) extrapolated to the unbounded box by a least-squares line in (a/L)^3
+!>   against 8 pi mu a^3 Omega (Stokes).
+!> - sweeps: Jacobi sweeps of the implicit ghost rows to 1e-12 for needles and disks (aspect 5) at
+!>   random orientations and positions, 64^3 to 256^3 (immersed_sweep_survey).
 program bench_immersed_ladder
   use agglo_kinds, only: wp
   use parallel_env, only: parallel_start, parallel_stop, is_root
   use sphere_array_case, only: sphere_array_case_t, sphere_array_result_t, run_sphere_array
+  use immersed_sweep_survey, only: sweep_survey_t, run_sweep_survey
+  use stokes_resistance, only: spheroid_resistance_coefficients
+  use spheroid, only: make_spheroid, spheroid_t
   implicit none
-  real(wp), parameter :: fractions(2) = [0.125_wp, 0.064_wp], references(2) = [4.292_wp, 2.810_wp]
-  real(wp), parameter :: diameters(3) = [8.0_wp, 12.0_wp, 16.0_wp]
   character(len=8), parameter :: couplings(2) = [character(len=8) :: 'implicit', 'explicit']
-  type(sphere_array_case_t) :: case
-  type(sphere_array_result_t) :: result
-  real(wp) :: errors(3), sizes(3), x(3), y(3), slope, unbounded
-  integer :: f, c, d, resolution
+  character(len=64) :: argument
+  integer :: a
 
   call parallel_start()
-  if (is_root()) then
-    print '(a)', '| phi | coupling | cells | D/dx | K | K (Z&H) | error | steps | sweeps mean/max | slip | wall s |'
-    print '(a)', '|---|---|---|---|---|---|---|---|---|---|---|'
-  end if
-  do f = 1, size(fractions)
-    do c = 1, size(couplings)
-      do d = 1, size(diameters)
-        case%volume_fraction = fractions(f)
-        case%coupling = couplings(c)
-        case%cells = nint(diameters(d) / (6.0_wp * fractions(f) / acos(-1.0_wp))**(1.0_wp / 3.0_wp))
-        case%max_steps = 60000
-        call run_sphere_array(case, result)
-        errors(d) = result%drag_coefficient / references(f) - 1.0_wp
-        sizes(d) = result%diameter_cells
-        if (is_root()) print '(a,f5.3,a,a,a,i0,a,f5.2,a,f6.4,a,f5.3,a,f7.2,a,i0,a,f4.1,a,i0,a,es8.1,a,f6.1,a,a)', &
-            '| ', fractions(f), ' | ', trim(couplings(c)), ' | ', case%cells, '^3 | ', result%diameter_cells, ' | ', &
-            result%drag_coefficient, ' | ', references(f), ' | ', 100 * errors(d), '% | ', result%steps, ' | ', &
-            result%mean_sweeps, '/', result%max_sweeps, ' | ', result%slip, ' | ', result%wall_seconds, &
-            merge(' |         ', ' unsteady |', result%steady)
-      end do
-      if (is_root()) print '(a,f5.3,a,a,a,f5.2)', '|   | observed order, phi = ', fractions(f), ', ', trim(couplings(c)), &
-          ': ', log(abs(errors(1)) / abs(errors(3))) / log(sizes(3) / sizes(1))
+  if (command_argument_count() == 0) then
+    call run_section('arrays')
+    call run_section('dilute')
+    call run_section('rotating')
+    call run_section('sweeps')
+    call run_section('spheroids')
+    call run_section('spheroids:6')
+  else
+    do a = 1, command_argument_count()
+      call get_command_argument(a, argument)
+      call run_section(trim(argument))
     end do
-  end do
-  if (is_root()) then
-    print '(a)', ''
-    print '(a)', '| coupling | cells | D/dx | a/L | T / (8 pi mu a^3 Omega) | steps | wall s |'
-    print '(a)', '|---|---|---|---|---|---|---|'
   end if
-  do resolution = 8, 12, 4
-  do c = 1, size(couplings)
-    do d = 1, 3
-      case%rotating = .true.
-      case%coupling = couplings(c)
-      case%cells = resolution * (d + 1)
-      case%volume_fraction = acos(-1.0_wp) / 6.0_wp / real(d + 1, wp)**3
-      call run_sphere_array(case, result)
-      x(d) = result%radius_over_box**3
-      y(d) = -result%torque(3) / result%stokes_torque
-      if (is_root()) print '(a,a,a,i0,a,f5.2,a,f6.4,a,f8.5,a,i0,a,f6.1,a,a)', '| ', trim(couplings(c)), ' | ', &
-          case%cells, '^3 | ', result%diameter_cells, ' | ', result%radius_over_box, ' | ', y(d), ' | ', result%steps, &
-          ' | ', result%wall_seconds, merge(' |         ', ' unsteady |', result%steady)
-    end do
-    slope = (sum(x * y) - sum(x) * sum(y) / 3) / (sum(x**2) - sum(x)**2 / 3)
-    unbounded = (sum(y) - slope * sum(x)) / 3
-    if (is_root()) print '(a,a,a,f8.5,a,f7.2,a)', '|   | ', trim(couplings(c)), ': extrapolated to a/L = 0: ', unbounded, &
-        ' (error ', 100 * (unbounded - 1), '%)'
-  end do
-  end do
   call parallel_stop()
+
+contains
+
+  !> One section, narrowed by the optional ":D/dx:coupling" suffixes.
+  subroutine run_section(spec)
+    character(len=*), intent(in) :: spec
+    character(len=64) :: name, only_coupling
+    real(wp) :: only_diameter
+    integer :: first, second, status
+    first = index(spec, ':')
+    name = spec
+    only_diameter = 0
+    only_coupling = ''
+    if (first > 0) then
+      name = spec(:first - 1)
+      second = index(spec(first + 1:), ':')
+      if (second > 0) then
+        only_coupling = spec(first + second + 1:)
+        second = first + second
+      else
+        second = len_trim(spec) + 1
+      end if
+      if (second - 1 > first) then
+        read(spec(first + 1:second - 1), *, iostat=status) only_diameter
+        if (status /= 0) then
+          if (is_root()) print '(a)', 'bench_immersed_ladder: '''//trim(spec)//''': D/dx is not a number'
+          error stop 1
+        end if
+      end if
+    end if
+    select case (trim(name))
+    case ('arrays')
+      call array_table([0.125_wp, 0.064_wp], [4.292_wp, 2.810_wp], [8.0_wp, 12.0_wp, 16.0_wp], only_diameter, &
+                       only_coupling)
+    case ('dilute')
+      call array_table([0.027_wp], [2.008_wp], [10.0_wp, 12.0_wp, 16.0_wp], only_diameter, only_coupling)
+    case ('rotating')
+      call rotating_table([8, 12, 16], only_diameter, only_coupling)
+    case ('sweeps')
+      call sweep_table()
+    case ('spheroids')
+      ! spheroids:T: thinnest dimension T cells (default 4.4), the boxes scaled with it.
+      call spheroid_table(merge(4.4_wp, only_diameter, only_diameter <= 0), only_coupling)
+    case default
+      if (is_root()) print '(a)', 'bench_immersed_ladder: unknown section '''//trim(spec)// &
+          '''; allowed: arrays, dilute, rotating, sweeps, spheroids (each optionally :D/dx:coupling; ' // &
+          'for spheroids :thin cells:coupling)'
+      error stop 1
+    end select
+  end subroutine run_section
+
+  logical function chosen(diameter, coupling, only_diameter, only_coupling)
+    real(wp), intent(in) :: diameter, only_diameter
+    character(len=*), intent(in) :: coupling, only_coupling
+    chosen = (only_diameter == 0 .or. abs(diameter - only_diameter) < 0.5_wp) .and. &
+             (len_trim(only_coupling) == 0 .or. trim(coupling) == trim(only_coupling))
+  end function chosen
+
+  !> Sphere arrays against Zick & Homsy, with the observed order between the first and last D/dx.
+  subroutine array_table(fractions, references, diameters, only_diameter, only_coupling)
+    real(wp), intent(in) :: fractions(:), references(:), diameters(:), only_diameter
+    character(len=*), intent(in) :: only_coupling
+    type(sphere_array_case_t) :: case
+    type(sphere_array_result_t) :: result
+    real(wp) :: errors(size(diameters)), sizes(size(diameters))
+    integer :: f, c, d, n
+    if (is_root()) then
+      print '(a)', '| phi | coupling | cells | D/dx | K | K (Z&H) | error | steps | sweeps mean/max | slip | wall s |'
+      print '(a)', '|---|---|---|---|---|---|---|---|---|---|---|'
+    end if
+    n = size(diameters)
+    do f = 1, size(fractions)
+      do c = 1, size(couplings)
+        errors = 0
+        do d = 1, n
+          if (.not. chosen(diameters(d), couplings(c), only_diameter, only_coupling)) cycle
+          case%volume_fraction = fractions(f)
+          case%coupling = couplings(c)
+          case%cells = nint(diameters(d) / (6.0_wp * fractions(f) / acos(-1.0_wp))**(1.0_wp / 3.0_wp))
+          case%max_steps = 80000
+          if (fractions(f) < 0.05_wp) case%steady_tolerance = 1.0e-8_wp
+          call run_sphere_array(case, result)
+          errors(d) = result%drag_coefficient / references(f) - 1.0_wp
+          sizes(d) = result%diameter_cells
+          if (is_root()) print '(a,f5.3,a,a,a,i0,a,f5.2,a,f6.4,a,f5.3,a,f7.2,a,i0,a,f4.1,a,i0,a,es8.1,a,f6.1,a,a)', &
+              '| ', fractions(f), ' | ', trim(couplings(c)), ' | ', case%cells, '^3 | ', result%diameter_cells, ' | ', &
+              result%drag_coefficient, ' | ', references(f), ' | ', 100 * errors(d), '% | ', result%steps, ' | ', &
+              result%mean_sweeps, '/', result%max_sweeps, ' | ', result%slip, ' | ', result%wall_seconds, &
+              merge(' |         ', ' unsteady |', result%steady)
+        end do
+        if (is_root() .and. errors(1) /= 0 .and. errors(n) /= 0) &
+          print '(a,f5.3,a,a,a,f5.2)', '|   | observed order, phi = ', fractions(f), ', ', trim(couplings(c)), &
+              ': ', log(abs(errors(1)) / abs(errors(n))) / log(sizes(n) / sizes(1))
+      end do
+    end do
+    if (is_root()) print '(a)', ''
+  end subroutine array_table
+
+  !> Rotating sphere in boxes L/D = 2, 3, 4 at each D/dx, extrapolated in (a/L)^3.
+  subroutine rotating_table(resolutions, only_diameter, only_coupling)
+    integer, intent(in) :: resolutions(:)
+    real(wp), intent(in) :: only_diameter
+    character(len=*), intent(in) :: only_coupling
+    type(sphere_array_case_t) :: case
+    type(sphere_array_result_t) :: result
+    real(wp) :: x(3), y(3), slope, unbounded
+    integer :: r, c, d
+    if (is_root()) then
+      print '(a)', '| coupling | cells | D/dx | a/L | T / (8 pi mu a^3 Omega) | steps | wall s |'
+      print '(a)', '|---|---|---|---|---|---|---|'
+    end if
+    do r = 1, size(resolutions)
+      do c = 1, size(couplings)
+        if (.not. chosen(real(resolutions(r), wp), couplings(c), only_diameter, only_coupling)) cycle
+        do d = 1, 3
+          case%rotating = .true.
+          case%coupling = couplings(c)
+          case%cells = resolutions(r) * (d + 1)
+          case%volume_fraction = acos(-1.0_wp) / 6.0_wp / real(d + 1, wp)**3
+          case%max_steps = 40000
+          call run_sphere_array(case, result)
+          x(d) = result%radius_over_box**3
+          y(d) = -result%torque(3) / result%stokes_torque
+          if (is_root()) print '(a,a,a,i0,a,f5.2,a,f6.4,a,f8.5,a,i0,a,f6.1,a,a)', '| ', trim(couplings(c)), ' | ', &
+              case%cells, '^3 | ', result%diameter_cells, ' | ', result%radius_over_box, ' | ', y(d), ' | ', &
+              result%steps, ' | ', result%wall_seconds, merge(' |         ', ' unsteady |', result%steady)
+        end do
+        slope = (sum(x * y) - sum(x) * sum(y) / 3) / (sum(x**2) - sum(x)**2 / 3)
+        unbounded = (sum(y) - slope * sum(x)) / 3
+        if (is_root()) print '(a,a,a,i0,a,f8.5,a,f7.2,a,f5.2,a)', '|   | ', trim(couplings(c)), ', D/dx = ', &
+            resolutions(r), ': extrapolated to a/L = 0: ', unbounded, ' (error ', 100 * (unbounded - 1), &
+            '%), slope ', slope, ' |'
+      end do
+    end do
+    if (is_root()) print '(a)', ''
+  end subroutine rotating_table
+
+  !> Ghost-row sweeps for random needles and disks.
+  subroutine sweep_table()
+    type(sweep_survey_t) :: survey
+    ! Volume-equivalent radius 0.1 mm at 64^3 to 256^3, then the paper's 50 um at 128^3 and 256^3.
+    integer, parameter :: grids(5) = [64, 128, 256, 128, 256], placements(5) = [16, 8, 4, 8, 4]
+    real(wp), parameter :: radii(5) = [0.1e-3_wp, 0.1e-3_wp, 0.1e-3_wp, 0.05e-3_wp, 0.05e-3_wp]
+    character(len=8), parameter :: shapes(2) = [character(len=8) :: 'needle', 'disk']
+    integer :: g, s
+    if (is_root()) then
+      print '(a)', '| shape | r, mm | cells | thin dimension, cells | placements | ghosts per placement | ' // &
+          'sweeps mean/max | residual max | classification s | imposition s |'
+      print '(a)', '|---|---|---|---|---|---|---|---|---|---|'
+    end if
+    do g = 1, size(grids)
+      do s = 1, size(shapes)
+        survey%shape = shapes(s)
+        survey%cells = grids(g)
+        survey%placements = placements(g)
+        survey%radius = radii(g)
+        call run_sweep_survey(survey)
+        if (is_root()) print '(a,a,a,f5.3,a,i0,a,f5.2,a,i0,a,f8.0,a,f4.1,a,i0,a,es8.1,a,f7.3,a,f7.3,a)', '| ', &
+            trim(shapes(s)), ' | ', 1.0e3_wp * radii(g), ' | ', grids(g), '^3 | ', survey%thin_cells, ' | ', &
+            survey%placements, ' | ', &
+            survey%mean_ghosts, ' | ', survey%mean_sweeps, '/', survey%max_sweeps, ' | ', survey%max_residual, &
+            ' | ', survey%classify_seconds, ' | ', survey%impose_seconds, ' |'
+      end do
+    end do
+    if (is_root()) print '(a)', ''
+  end subroutine sweep_table
+  !> Needle and disk (aspect 5, thin_cells thin: 4.4 by default) translating along and across the
+  !> axis (fixed body, driven box, F = f L^3 against the superficial velocity U) and rotating about
+  !> and across it, in boxes of 32^3 and 40^3 (scaled with thin_cells/4.4), against Oberbeck/Perrin
+  !> (stokes_resistance). Translation: the periodic array's mobility is
+  !> 6 pi mu r U/F = 1/c - 2.837 r/L + C (r/L)^3 (Hasimoto 1959, J. Fluid Mech. 5, 317: the O(1/L)
+  !> term does not depend on the body's shape), solved for c and C from the two boxes. Rotation: a
+  !> line in (r/L)^3 through the two boxes. Torque of the translating body over F r (symmetry), at
+  !> the offset of the tables and with the centre on a grid symmetry point. Translation stops on the
+  !> Aitken estimate of U (sphere_array_case, aitken_window), rotation when the torque changes by
+  !> less than 1e-7 per step (the remaining error is below 1e-4).
+  subroutine spheroid_table(thin_cells, only_coupling)
+    real(wp), intent(in) :: thin_cells
+    character(len=*), intent(in) :: only_coupling
+    character(len=8), parameter :: shapes(2) = [character(len=8) :: 'needle', 'disk']
+    character(len=16), parameter :: motions(4) = [character(len=16) :: 'translate along', 'translate across', &
+                                                  'rotate about', 'rotate across']
+    real(wp), parameter :: hasimoto = 2.837_wp
+    integer :: boxes(2)
+    type(sphere_array_case_t) :: case
+    type(sphere_array_result_t) :: result
+    type(spheroid_t) :: unit_shape
+    real(wp) :: reference(4), x(2), y(2), expected, measured, extrapolated, cubic, torque_ratio, r
+    integer :: s, m, b, c
+    boxes = nint([32.0_wp, 40.0_wp] * thin_cells / 4.4_wp)
+    if (is_root()) then
+      print '(a)', '| shape | motion | coupling | cells | r/dx | r/L | raw coefficient | Oberbeck/Perrin | ' // &
+          'torque/(F r) | steps | wall s |'
+      print '(a)', '|---|---|---|---|---|---|---|---|---|---|---|'
+    end if
+    do c = 1, size(couplings)
+      if (len_trim(only_coupling) > 0 .and. trim(couplings(c)) /= trim(only_coupling)) cycle
+      do s = 1, size(shapes)
+        unit_shape = make_spheroid(trim(shapes(s)), 1.0_wp, 1.0_wp)
+        reference = spheroid_resistance_coefficients(unit_shape%a, unit_shape%b)
+        do m = 1, size(motions)
+          expected = reference(m)
+          do b = 1, size(boxes)
+            case = sphere_array_case_t()
+            case%coupling = couplings(c)
+            case%shape = shapes(s)
+            case%cells = boxes(b)
+            case%radius_cells = thin_cells / (2.0_wp * min(unit_shape%a, unit_shape%b))
+            case%steady_tolerance = 1.0e-7_wp
+            case%aitken_window = 1000
+            case%max_steps = 60000
+            case%rotating = m >= 3
+            case%axis = [1.0_wp, 0.0_wp, 0.0_wp]
+            if (m == 2) case%axis = [0.0_wp, 1.0_wp, 0.0_wp]
+            case%rotation_axis = [1.0_wp, 0.0_wp, 0.0_wp]
+            if (m == 4) case%rotation_axis = [0.0_wp, 0.0_wp, 1.0_wp]
+            call run_sphere_array(case, result)
+            r = result%radius
+            x(b) = result%radius_over_box
+            torque_ratio = 0
+            if (m <= 2) then
+              measured = result%drive(1) / (6.0_wp * acos(-1.0_wp) * result%dynamic_viscosity * r * &
+                                            result%superficial_velocity)
+              torque_ratio = norm2(result%torque) / (result%drive(1) * r)
+              y(b) = 1.0_wp / measured
+            else
+              measured = -dot_product(result%torque, case%rotation_axis) / &
+                         (8.0_wp * acos(-1.0_wp) * result%dynamic_viscosity * r**3 * result%angular_speed)
+              y(b) = measured
+            end if
+            if (is_root()) print '(a,a,a,a,a,a,a,i0,a,f5.2,a,f6.4,a,f7.4,a,f7.4,a,es8.1,a,i0,a,f6.1,a,a)', '| ', &
+                trim(shapes(s)), ' | ', trim(motions(m)), ' | ', trim(couplings(c)), ' | ', boxes(b), '^3 | ', &
+                case%radius_cells, ' | ', x(b), ' | ', measured, ' | ', expected, ' | ', torque_ratio, ' | ', &
+                result%steps, ' | ', result%wall_seconds, merge(' |         ', ' unsteady |', result%steady)
+          end do
+          if (m <= 2) then
+            ! Symmetry: the same body with its centre on a grid symmetry point (a cell-face corner).
+            case%cells = boxes(1)
+            case%offset_cells = 0
+            call run_sphere_array(case, result)
+            if (is_root()) print '(a,a,a,a,a,i0,a,es8.1,a,i0,a,f6.1,a)', '|   | ', trim(shapes(s)), ', ', &
+                trim(motions(m)), ', centre on a grid symmetry point, ', boxes(1), '^3: torque/(F r) ', &
+                norm2(result%torque) / (result%drive(1) * result%radius), ', ', result%steps, ' steps, ', &
+                result%wall_seconds, ' s |'
+            ! y = 1/c - hasimoto x + C x^3 through both boxes.
+            cubic = ((y(1) + hasimoto * x(1)) - (y(2) + hasimoto * x(2))) / (x(1)**3 - x(2)**3)
+            extrapolated = 1.0_wp / (y(1) + hasimoto * x(1) - cubic * x(1)**3)
+          else
+            cubic = (y(1) - y(2)) / (x(1)**3 - x(2)**3)
+            extrapolated = y(1) - cubic * x(1)**3
+          end if
+          if (is_root()) print '(a,a,a,a,a,a,a,f7.4,a,f7.4,a,f6.2,a,f7.2,a)', '|   | ', trim(shapes(s)), ', ', &
+              trim(motions(m)), ', ', trim(couplings(c)), ': extrapolated ', extrapolated, ' against ', expected, &
+              ' (error ', 100 * (extrapolated / expected - 1), '%), (r/L)^3 coefficient ', cubic, ' |'
+        end do
+      end do
+    end do
+    if (is_root()) print '(a)', ''
+  end subroutine spheroid_table
 end program bench_immersed_ladder
