@@ -15,7 +15,8 @@ module config_scene
     logical :: collisions = .true.                !< hard-body collisions between the particles
     integer :: particle_substeps = 1              !< particle steps per fluid step (frozen loads)
     !> How the pair in the resolved fluid feels it: 'point' (analytic Stokes resistance in the flow at
-    !> each centre, the fluid solved without the bodies) | 'resolved' (immersed boundary; not yet)
+    !> each centre, the fluid solved without the bodies) | 'resolved' (free particles resolved by the
+    !> immersed boundary)
     character(len=16) :: particle_coupling = 'resolved'
     logical :: added_mass = .false.               !< particle_coupling = 'point': implicit added-mass term
   end type scene_config_t

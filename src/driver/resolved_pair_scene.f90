@@ -285,8 +285,9 @@ contains
                                          cfg%scene%added_mass, cfg%run%restart, cfg%pair%gravity)
       call move_alloc(resolved, hydrodynamics)
     case default
-      call fatal('resolved pair scene: &scene particle_coupling = '''//trim(cfg%scene%particle_coupling)// &
-                 ''' is not available yet')
+      ! The deck checks allow only 'point' and 'resolved'.
+      call fatal('resolved pair scene: unknown &scene particle_coupling = '''//trim(cfg%scene%particle_coupling)// &
+                 '''', collective=.false.)
     end select
   end subroutine create_hydrodynamics
 
