@@ -216,34 +216,15 @@ contains
   !> Helmholtz values when dt changes, the other is told the nodes were reclassified and assembles
   !> its rows again. Same system, so the same loads.
   subroutine check_new_dt_same_as_rebuild()
-    type(grid_config_t) :: grid_cfg
-    type(fluid_config_t) :: fluid_cfg
     type(fluid_solver_t) :: solver(2)
     type(immersed_scene_t) :: scene(2)
-    type(prescribed_motion_t) :: motion(1)
-    type(ibm_settings_t) :: settings
     real(wp), parameter :: factors(3) = [1.0_wp, 1.7_wp, 0.6_wp]
-    real(wp) :: dt, worst, box
-    integer :: step, s
-    box = 1.0e-3_wp
-    grid_cfg = grid_config_t(nx=16, ny=16, nz=16, length_x=box, length_y=box, length_z=box)
-    fluid_cfg%density = 1000.0_wp
-    fluid_cfg%viscosity = 1.0e-6_wp
-    fluid_cfg%pressure_scheme = 'incremental'
-    fluid_cfg%viscous_scheme = 'crank_nicolson'
-    motion(1)%shape = make_spheroid('sphere', 0.25_wp * box, 1000.0_wp)
-    motion(1)%centre = [0.52_wp, 0.47_wp, 0.51_wp] * box
-    settings%coupling = 'implicit'
-    settings%fluid_density = fluid_cfg%density
-    do s = 1, 2
-      call fluid_solver_create(solver(s), grid_cfg, fluid_cfg)
-      solver(s)%u = 0; solver(s)%v = 0; solver(s)%w = 0; solver(s)%pressure = 0
-      call immersed_scene_create(scene(s), solver(s), motion, settings, [2.0_wp, 0.5_wp, 0.0_wp], &
-                                 predictor_config=default_predictor_config(1.0e-12_wp, 200))
-    end do
+    real(wp) :: dt, worst
+    integer :: step
+    call twin_sphere_scenes(solver, scene, [0.0_wp, 0.0_wp, 0.0_wp])
     worst = 0
     do step = 1, size(factors)
-      dt = factors(step) * solver(1)%grid%dx**2 / fluid_cfg%viscosity
+      dt = factors(step) * solver(1)%grid%dx**2 / solver(1)%viscosity
       call immersed_step(scene(1), solver(1), dt)
       call immersed_predictor_reclassified(scene(2)%predictor)
       call immersed_step(scene(2), solver(2), dt)
@@ -256,19 +237,19 @@ contains
                'new_dt_on_fixed_bodies_builds_once')
   end subroutine check_new_dt_same_as_rebuild
 
-  !> A sphere moving 0.01 cells per step (reclassified every step; most steps change no node's
-  !> status): one scene replaces only the values when the rows keep their structure, the other
-  !> creates its hypre solvers every step. Same systems, so the same loads.
-  subroutine check_slow_body_same_as_creation()
+  !> Two identical scenes (16^3, water-like, Crank-Nicolson, incremental pressure, driven) with one
+  !> implicit sphere moving cells_per_step(:) cells per step of dt = dx^2 / nu: the pairs of
+  !> check_new_dt_same_as_rebuild and check_slow_body_same_as_creation.
+  subroutine twin_sphere_scenes(solver, scene, cells_per_step)
+    type(fluid_solver_t), intent(inout) :: solver(2)
+    type(immersed_scene_t), intent(inout) :: scene(2)
+    real(wp), intent(in) :: cells_per_step(3)
     type(grid_config_t) :: grid_cfg
     type(fluid_config_t) :: fluid_cfg
-    type(fluid_solver_t) :: solver(2)
-    type(immersed_scene_t) :: scene(2)
     type(prescribed_motion_t) :: motion(1)
     type(ibm_settings_t) :: settings
-    real(wp) :: dt, worst, box
-    integer :: step, s
-    box = 1.0e-3_wp
+    real(wp), parameter :: box = 1.0e-3_wp
+    integer :: s
     grid_cfg = grid_config_t(nx=16, ny=16, nz=16, length_x=box, length_y=box, length_z=box)
     fluid_cfg%density = 1000.0_wp
     fluid_cfg%viscosity = 1.0e-6_wp
@@ -276,16 +257,28 @@ contains
     fluid_cfg%viscous_scheme = 'crank_nicolson'
     motion(1)%shape = make_spheroid('sphere', 0.25_wp * box, 1000.0_wp)
     motion(1)%centre = [0.52_wp, 0.47_wp, 0.51_wp] * box
+    ! dx / (dx^2 / nu) = nu / dx
+    motion(1)%velocity = cells_per_step * fluid_cfg%viscosity / (box / 16)
     settings%coupling = 'implicit'
     settings%fluid_density = fluid_cfg%density
     do s = 1, 2
       call fluid_solver_create(solver(s), grid_cfg, fluid_cfg)
       solver(s)%u = 0; solver(s)%v = 0; solver(s)%w = 0; solver(s)%pressure = 0
-      dt = solver(s)%grid%dx**2 / fluid_cfg%viscosity
-      motion(1)%velocity = [0.01_wp, 0.004_wp, 0.0_wp] * solver(s)%grid%dx / dt
       call immersed_scene_create(scene(s), solver(s), motion, settings, [2.0_wp, 0.5_wp, 0.0_wp], &
                                  predictor_config=default_predictor_config(1.0e-12_wp, 200))
     end do
+  end subroutine twin_sphere_scenes
+
+  !> A sphere moving 0.01 cells per step (reclassified every step; most steps change no node's
+  !> status): one scene replaces only the values when the rows keep their structure, the other
+  !> creates its hypre solvers every step. Same systems, so the same loads.
+  subroutine check_slow_body_same_as_creation()
+    type(fluid_solver_t) :: solver(2)
+    type(immersed_scene_t) :: scene(2)
+    real(wp) :: dt, worst
+    integer :: step, s
+    call twin_sphere_scenes(solver, scene, [0.01_wp, 0.004_wp, 0.0_wp])
+    dt = solver(1)%grid%dx**2 / solver(1)%viscosity
     scene(2)%predictor%reuse_structure = .false.
     worst = 0
     do step = 1, 8
