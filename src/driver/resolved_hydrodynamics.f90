@@ -35,6 +35,7 @@
 module resolved_hydrodynamics
   use agglo_kinds, only: wp
   use error_handling, only: fatal
+  use physical_constants, only: pi
   use logger, only: log_line
   use text_format, only: real_text, int_text
   use checkpoint_files, only: checkpoint_t
@@ -45,11 +46,13 @@ module resolved_hydrodynamics
   use rigid_body, only: angular_velocity_lab
   use quaternion, only: rotation_matrix, quaternion_from_axis_angle, quaternion_product, quaternion_normalise
   use spheroid, only: spheroid_t
-  use stokes_resistance, only: spheroid_added_mass_coefficients
+  use icosphere_mesh, only: icosphere_mesh_t, build_icosphere_mesh
+  use stokes_resistance, only: spheroid_added_mass_coefficients, stokes_resistance_t, stokes_resistance_of
   use immersed_geometry, only: immersed_body_t, thin_dimension_cells
   use immersed_boundary, only: ibm_settings_t, ibm_set_bodies, ibm_impose, imposition_report_t
   use immersed_scene, only: immersed_scene_t, prescribed_motion_t, immersed_scene_create, immersed_step
   use pair_hydrodynamics, only: pair_hydrodynamics_t
+  use hypre_solver, only: linear_solver_config_t
   implicit none
   private
   public :: resolved_hydrodynamics_t, resolved_hydrodynamics_create, rotational_added_inertia
@@ -64,6 +67,13 @@ module resolved_hydrodynamics
     real(wp), allocatable :: added_mass(:, :)                   !< (3, n) kg, body frame
     real(wp), allocatable :: weight(:, :)                       !< (3, n) N, net weight (rho_p - rho_f) V g (lab)
     real(wp), allocatable :: added_inertia(:, :)                !< (3, n) kg m^2, body frame
+    !> (3, n) body frame, with Crank-Nicolson only (zero with explicit diffusion): the Stokes
+    !> resistances C (N s/m, N m s) and the lengths L (m) of the one-step history reaction in the
+    !> lagged-reaction estimate (module header, "Long fluid steps")
+    real(wp), allocatable :: translational_resistance(:, :), rotational_resistance(:, :)
+    real(wp), allocatable :: translational_history_length(:, :), rotational_history_length(:, :)
+    real(wp) :: viscosity = 0                          !< m^2/s, kinematic
+    type(icosphere_mesh_t), allocatable :: meshes(:)   !< &bodies geometry = 'mesh': each body's (body frame)
     real(wp), allocatable :: imposed_velocity(:, :), imposed_angular_velocity(:, :)   !< (3, n) lab, last step
     real(wp), allocatable :: acceleration(:, :), angular_acceleration(:, :)           !< (3, n) lab, A^n, Alpha^n
   contains
@@ -81,9 +91,12 @@ contains
   !> settings: the imposition (&scene ibm_coupling, &bodies ghost_tolerance, max_sweeps);
   !> load_method, surface_level: as immersed_scene_create (&bodies load_method, mesh_level);
   !> stabilise: the added-mass stabilisation; restart: the fluid already holds the bodies;
-  !> gravity: m/s^2 (module header).
+  !> gravity: m/s^2 (module header); predictor_config: the hypre solve of the Crank-Nicolson
+  !> predictor (&fluid predictor_tolerance, predictor_max_iterations; immersed_scene_create's default
+  !> when absent); geometry_level: &bodies geometry = 'mesh', the icosphere level of the surface
+  !> the ghost nodes see (20 4^level faces, inside the spheroid; absent or -1: the analytic spheroid).
   subroutine resolved_hydrodynamics_create(provider, solver, system, settings, load_method, surface_level, &
-                                           stabilise, restart, gravity)
+                                           stabilise, restart, gravity, predictor_config, geometry_level)
     type(resolved_hydrodynamics_t), intent(out) :: provider
     type(fluid_solver_t), intent(inout) :: solver
     type(particle_system_t), intent(in) :: system
@@ -92,32 +105,59 @@ contains
     integer, intent(in) :: surface_level
     logical, intent(in) :: stabilise, restart
     real(wp), intent(in) :: gravity(3)
+    type(linear_solver_config_t), intent(in), optional :: predictor_config
+    integer, intent(in), optional :: geometry_level
     type(prescribed_motion_t), allocatable :: motion(:)
     real(wp) :: k(2), fluid_mass, ratio_translation, ratio_rotation
+    type(stokes_resistance_t) :: resistance
     integer :: i
     provider%box = [solver%grid%lx, solver%grid%ly, solver%grid%lz]
     allocate(motion(system%n))
     allocate(provider%added_mass(3, system%n), provider%added_inertia(3, system%n), provider%weight(3, system%n))
+    allocate(provider%translational_resistance(3, system%n), provider%rotational_resistance(3, system%n))
+    allocate(provider%translational_history_length(3, system%n), provider%rotational_history_length(3, system%n))
+    provider%translational_resistance = 0
+    provider%rotational_resistance = 0
+    provider%translational_history_length = provider%translational_resistance
+    provider%rotational_history_length = provider%translational_resistance
+    provider%viscosity = solver%viscosity
     ratio_translation = 0
     ratio_rotation = 0
+    if (present(geometry_level)) then
+      if (geometry_level >= 0) allocate(provider%meshes(system%n))
+    end if
     do i = 1, system%n
       call require_thick_enough(system%shapes(i), solver)
       ! At rest where the particle is: the scene's first placement; every step places the bodies anew.
       motion(i)%shape = system%shapes(i)
       motion(i)%centre = system%bodies(i)%position
       motion(i)%orientation = system%bodies(i)%quaternion
+      if (allocated(provider%meshes)) then
+        call build_icosphere_mesh(system%shapes(i), geometry_level, provider%meshes(i))
+        motion(i)%mesh = provider%meshes(i)
+      end if
       fluid_mass = solver%density * system%shapes(i)%volume
       provider%weight(:, i) = (system%bodies(i)%mass - fluid_mass) * gravity
       k = spheroid_added_mass_coefficients(system%shapes(i)%a, system%shapes(i)%b)
       provider%added_mass(:, i) = fluid_mass * [k(1), k(2), k(2)]
       provider%added_inertia(:, i) = [0.0_wp, 1.0_wp, 1.0_wp] * &
                                      rotational_added_inertia(system%shapes(i), solver%density)
+      if (solver%crank_nicolson) then
+        resistance = stokes_resistance_of(system%shapes(i), solver%density * solver%viscosity)
+        provider%translational_resistance(:, i) = resistance%translational
+        provider%rotational_resistance(:, i) = resistance%rotational
+        ! The sphere's lengths a (Basset) and a / 3 (the rotating sphere's boundary layer), from the
+        ! resistances' equivalent radii C / (6 pi mu) and (C_r / (8 pi mu))^(1/3) for a spheroid.
+        provider%translational_history_length(:, i) = resistance%translational / (6.0_wp * pi * resistance%dynamic_viscosity)
+        provider%rotational_history_length(:, i) = (resistance%rotational / (8.0_wp * pi * resistance%dynamic_viscosity)) &
+                                                   **(1.0_wp / 3.0_wp) / 3.0_wp
+      end if
       ratio_translation = max(ratio_translation, maxval(provider%added_mass(:, i)) / system%bodies(i)%mass)
       ratio_rotation = max(ratio_rotation, maxval(provider%added_inertia(:, i) / system%bodies(i)%inertia_body))
     end do
     call immersed_scene_create(provider%scene, solver, motion, settings, &
                                -sum(provider%weight, dim=2) / (provider%box(1) * provider%box(2) * provider%box(3)), &
-                               load_method, surface_level)
+                               load_method, surface_level, predictor_config)
     allocate(provider%force(3, system%n), provider%torque(3, system%n))
     provider%force = 0
     provider%torque = 0
@@ -227,6 +267,7 @@ contains
     do i = 1, system%n
       omega = angular_velocity_lab(system%bodies(i))
       bodies(i)%shape = system%shapes(i)
+      if (allocated(self%meshes)) bodies(i)%mesh = self%meshes(i)
       bodies(i)%centre = modulo(system%bodies(i)%position + lead * system%bodies(i)%velocity, self%box)
       bodies(i)%orientation = quaternion_normalise(quaternion_product( &
           quaternion_from_axis_angle(omega, norm2(omega) * lead), system%bodies(i)%quaternion))
@@ -241,7 +282,7 @@ contains
     type(particle_system_t), intent(in) :: system
     real(wp), intent(in) :: theta
     type(particle_loads_t), intent(inout) :: loads
-    real(wp) :: rotation(3, 3), total(3), estimate(3), rate(3)
+    real(wp) :: rotation(3, 3), total(3), estimate(3), rate(3), lagged(3)
     integer :: i
     if (.not. (theta >= 0.0_wp .and. theta <= 1.0_wp)) call fatal('resolved particles: loads at theta outside [0, 1]')
     do i = 1, system%n
@@ -253,18 +294,34 @@ contains
       rotation = rotation_matrix(system%bodies(i)%quaternion)
       associate (body => system%bodies(i), other_force => system%dlvo_loads%force(:, i), &
                  other_torque => system%dlvo_loads%torque(:, i))
-        ! Body frame: (m + M_a) a = F + M_a A + F_other; the load is m a - F_other.
+        ! Body frame: (m + M) a = F + M A + F_other, M = M_a + C dt; the load is m a - F_other.
         total = matmul(self%force(:, i) + self%weight(:, i) + other_force, rotation)
         estimate = matmul(self%acceleration(:, i), rotation)
-        rate = (total + self%added_mass(:, i) * estimate) / (body%mass + self%added_mass(:, i))
+        lagged = lagged_reaction(self%added_mass(:, i), self%translational_resistance(:, i), &
+                                 self%translational_history_length(:, i), self%dt, self%viscosity)
+        rate = (total + lagged * estimate) / (body%mass + lagged)
         loads%force(:, i) = body%mass * matmul(rotation, rate) - other_force   ! the weight included
         total = matmul(self%torque(:, i) + other_torque, rotation)
         estimate = matmul(self%angular_acceleration(:, i), rotation)
-        rate = (total + self%added_inertia(:, i) * estimate) / (body%inertia_body + self%added_inertia(:, i))
+        lagged = lagged_reaction(self%added_inertia(:, i), self%rotational_resistance(:, i), &
+                                 self%rotational_history_length(:, i), self%dt, self%viscosity)
+        rate = (total + lagged * estimate) / (body%inertia_body + lagged)
         loads%torque(:, i) = matmul(rotation, body%inertia_body * rate) - other_torque
       end associate
     end do
   end subroutine resolved_loads
+
+  !> The lagged reaction's estimate per body axis (kg, or kg m^2 for rotation; module header):
+  !> the impulse / velocity change of a body whose velocity steps at the start of a fluid step,
+  !> integrated over the step, M + C dt + C L 2 sqrt(dt / (pi nu)): potential flow, quasi-steady
+  !> drag and the history (Basset) reaction C L / sqrt(pi nu t).
+  pure function lagged_reaction(added, resistance, length, dt, viscosity) result(reaction)
+    real(wp), intent(in) :: added(3), resistance(3), length(3), dt, viscosity
+    real(wp) :: reaction(3)
+    reaction = added
+    if (dt > 0.0_wp .and. viscosity > 0.0_wp) &
+      reaction = added + resistance * (dt + 2.0_wp * length * sqrt(dt / (pi * viscosity)))
+  end function lagged_reaction
 
   !> The last step's ghost-row sweeps (near contact the two bodies' rows couple and need more) and
   !> the bodies' force magnitudes.
