@@ -23,14 +23,34 @@
 !> to the particle step is m dU/dt - F_other (I dOmega/dt - T_other), so that the explicit step,
 !> which divides by m (I), moves the body with that acceleration (as point_particle_coupling does).
 !>
+!> Long fluid steps (&fluid viscous_scheme = 'crank_nicolson'; docs/theory.md, "Crank-Nicolson with
+!> free particles"): the ghost and interior rows of the predictor's system (immersed_predictor) hold
+!> the same lagged U^n, Omega^n at t^{n+1} as the explicit path's imposition, so the added-mass
+!> estimate stays consistent; the bodies are reclassified every step as there. At nu dt/dx^2 of
+!> order 1 and above the fluid's reaction to a velocity change within one step is no longer the
+!> potential-flow added mass alone: the Stokes drag C dt and the history (Basset) reaction, whose
+!> impulse over the first step is C L 2 sqrt(dt / (pi nu)) (L = a for a sphere: 6 pi mu a^2 /
+!> sqrt(pi nu t) integrated; for rotation a / 3), grow with dt and reach the body's own mass (the
+!> settling sphere at nu dt/dx^2 = 10 diverged with M_a alone). The estimate M becomes, per body
+!> axis, M_a + C dt + M_B with M_B = C L 2 sqrt(dt / (pi nu)) (C, L from the spheroid's Stokes
+!> resistance, stokes_resistance), taken implicitly as above; and because a velocity change keeps
+!> reacting through its history in later steps (the Basset weights w_j = sqrt(j + 1) - sqrt(j) of a
+!> change j steps back), what that tail will put into the next step's load is taken out of the
+!> put-back (function put_back; history_steps steps remembered, the oldest change leaving with its
+!> whole remaining weight so that the put-back weights sum to M and the box's momentum closes).
+!> With explicit diffusion C and L are zero and the step is the added-mass one above unchanged.
+!> Sub-steps: the particle sub-steps of a long fluid step integrate the frozen load as before; the
+!> placement x^n + U^n dt differs from the particles' x^{n+1} by a dt^2 / 2, O(1e-4) cell at
+!> nu dt/dx^2 = 10 in the validation, below the ghost tolerance of the classification.
+!>
 !> Gravity (&pair gravity, g): each body feels its net weight W = (rho_p - rho_f) V g as a
 !> constant external force (added to the loads), and the whole box (fluid and bodies' nodes) the
 !> uniform drive -sum W / L^3, the mean pressure gradient beyond the hydrostatic one that keeps the
 !> box's total momentum from growing (a settling suspension in a periodic box; the drive's share on
 !> each body, -V sum W / L^3, arrives through the momentum-balance load).
 !>
-!> State across fluid steps: the velocities imposed in the last step (for A^n) and the loads;
-!> both go into the checkpoint (resolved_write_checkpoint), the geometry is recomputed from the
+!> State across fluid steps: the velocities imposed in the last step (for A^n), the earlier
+!> A^{n-j} (Crank-Nicolson's history estimate) and the loads; all go into the checkpoint (resolved_write_checkpoint), the geometry is recomputed from the
 !> particle state every step.
 module resolved_hydrodynamics
   use agglo_kinds, only: wp
@@ -39,7 +59,7 @@ module resolved_hydrodynamics
   use logger, only: log_line
   use text_format, only: real_text, int_text
   use checkpoint_files, only: checkpoint_t
-  use hdf5_io, only: h5_write_array, h5_read_array
+  use hdf5_io, only: h5_write_array, h5_read_array, h5_exists
   use fluid_solver, only: fluid_solver_t
   use forcing_driver, only: forcing_driver_t, forcing_driver_evaluate, forcing_driver_advance
   use particle_system, only: particle_system_t, particle_loads_t
@@ -56,6 +76,9 @@ module resolved_hydrodynamics
   implicit none
   private
   public :: resolved_hydrodynamics_t, resolved_hydrodynamics_create, rotational_added_inertia
+
+  !> Fluid steps of velocity changes the history reaction's estimate remembers (Crank-Nicolson).
+  integer, parameter :: history_steps = 32
 
   type, extends(pair_hydrodynamics_t) :: resolved_hydrodynamics_t
     type(immersed_scene_t) :: scene
@@ -76,6 +99,8 @@ module resolved_hydrodynamics
     type(icosphere_mesh_t), allocatable :: meshes(:)   !< &bodies geometry = 'mesh': each body's (body frame)
     real(wp), allocatable :: imposed_velocity(:, :), imposed_angular_velocity(:, :)   !< (3, n) lab, last step
     real(wp), allocatable :: acceleration(:, :), angular_acceleration(:, :)           !< (3, n) lab, A^n, Alpha^n
+    !> (3, n, history_steps) lab: A^{n-1}, A^{n-2}, ... (and Alpha), the history reaction's past (Crank-Nicolson)
+    real(wp), allocatable :: earlier_acceleration(:, :, :), earlier_angular_acceleration(:, :, :)
   contains
     procedure :: prepare => resolved_prepare
     procedure :: fluid_step => resolved_fluid_step
@@ -165,6 +190,10 @@ contains
     provider%imposed_angular_velocity = provider%force
     provider%acceleration = provider%force
     provider%angular_acceleration = provider%force
+    allocate(provider%earlier_acceleration(3, system%n, history_steps), &
+             provider%earlier_angular_acceleration(3, system%n, history_steps))
+    provider%earlier_acceleration = 0
+    provider%earlier_angular_acceleration = 0
     provider%stabilise = stabilise
     provider%inject = .not. restart
     call log_line('resolved particles: largest added mass / mass '//real_text(ratio_translation)// &
@@ -250,6 +279,10 @@ contains
     self%force = self%scene%force
     self%torque = self%scene%torque
     self%dt = dt
+    self%earlier_acceleration = eoshift(self%earlier_acceleration, shift=-1, boundary=0.0_wp, dim=3)
+    self%earlier_acceleration(:, :, 1) = self%acceleration
+    self%earlier_angular_acceleration = eoshift(self%earlier_angular_acceleration, shift=-1, boundary=0.0_wp, dim=3)
+    self%earlier_angular_acceleration(:, :, 1) = self%angular_acceleration
     self%acceleration = (self%imposed_velocity - previous) / dt
     self%angular_acceleration = (self%imposed_angular_velocity - previous_angular) / dt
   end subroutine resolved_fluid_step
@@ -282,7 +315,7 @@ contains
     type(particle_system_t), intent(in) :: system
     real(wp), intent(in) :: theta
     type(particle_loads_t), intent(inout) :: loads
-    real(wp) :: rotation(3, 3), total(3), estimate(3), rate(3), lagged(3)
+    real(wp) :: rotation(3, 3), total(3), estimate(3), rate(3), lagged(3), history(3)
     integer :: i
     if (.not. (theta >= 0.0_wp .and. theta <= 1.0_wp)) call fatal('resolved particles: loads at theta outside [0, 1]')
     do i = 1, system%n
@@ -296,16 +329,17 @@ contains
                  other_torque => system%dlvo_loads%torque(:, i))
         ! Body frame: (m + M) a = F + M A + F_other, M = M_a + C dt; the load is m a - F_other.
         total = matmul(self%force(:, i) + self%weight(:, i) + other_force, rotation)
-        estimate = matmul(self%acceleration(:, i), rotation)
-        lagged = lagged_reaction(self%added_mass(:, i), self%translational_resistance(:, i), &
-                                 self%translational_history_length(:, i), self%dt, self%viscosity)
-        rate = (total + lagged * estimate) / (body%mass + lagged)
+        call lagged_reaction(self%added_mass(:, i), self%translational_resistance(:, i), &
+                             self%translational_history_length(:, i), self%dt, self%viscosity, lagged, history)
+        estimate = put_back(lagged, history, self%acceleration(:, i), self%earlier_acceleration(:, i, :), rotation)
+        rate = (total + estimate) / (body%mass + lagged)
         loads%force(:, i) = body%mass * matmul(rotation, rate) - other_force   ! the weight included
         total = matmul(self%torque(:, i) + other_torque, rotation)
-        estimate = matmul(self%angular_acceleration(:, i), rotation)
-        lagged = lagged_reaction(self%added_inertia(:, i), self%rotational_resistance(:, i), &
-                                 self%rotational_history_length(:, i), self%dt, self%viscosity)
-        rate = (total + lagged * estimate) / (body%inertia_body + lagged)
+        call lagged_reaction(self%added_inertia(:, i), self%rotational_resistance(:, i), &
+                             self%rotational_history_length(:, i), self%dt, self%viscosity, lagged, history)
+        estimate = put_back(lagged, history, self%angular_acceleration(:, i), &
+                            self%earlier_angular_acceleration(:, i, :), rotation)
+        rate = (total + estimate) / (body%inertia_body + lagged)
         loads%torque(:, i) = matmul(rotation, body%inertia_body * rate) - other_torque
       end associate
     end do
@@ -314,14 +348,40 @@ contains
   !> The lagged reaction's estimate per body axis (kg, or kg m^2 for rotation; module header):
   !> the impulse / velocity change of a body whose velocity steps at the start of a fluid step,
   !> integrated over the step, M + C dt + C L 2 sqrt(dt / (pi nu)): potential flow, quasi-steady
-  !> drag and the history (Basset) reaction C L / sqrt(pi nu t).
-  pure function lagged_reaction(added, resistance, length, dt, viscosity) result(reaction)
+  !> drag and the history (Basset) reaction C L / sqrt(pi nu t), whose part is history.
+  pure subroutine lagged_reaction(added, resistance, length, dt, viscosity, reaction, history)
     real(wp), intent(in) :: added(3), resistance(3), length(3), dt, viscosity
-    real(wp) :: reaction(3)
-    reaction = added
-    if (dt > 0.0_wp .and. viscosity > 0.0_wp) &
-      reaction = added + resistance * (dt + 2.0_wp * length * sqrt(dt / (pi * viscosity)))
-  end function lagged_reaction
+    real(wp), intent(out) :: reaction(3), history(3)
+    history = 0
+    if (dt > 0.0_wp .and. viscosity > 0.0_wp) history = resistance * 2.0_wp * length * sqrt(dt / (pi * viscosity))
+    reaction = added + resistance * dt + history
+  end subroutine lagged_reaction
+
+  !> The estimate put back into the lagged load (body frame): the reaction the last step's velocity
+  !> change A^n caused, less what the history reaction of each change still holds in the next step
+  !> (the Basset weights w_j = sqrt(j + 1) - sqrt(j) of a velocity step j steps back), over the
+  !> N = history_steps steps remembered:
+  !>   lagged A^n - history [w_1 A^n - sum_{j=1}^{N-1} (w_j - w_{j+1}) A^{n-j} - w_N A^{n-N}].
+  pure function put_back(lagged, history, current, earlier, rotation) result(estimate)
+    real(wp), intent(in) :: lagged(3), history(3), current(3), earlier(:, :), rotation(3, 3)
+    real(wp) :: estimate(3), past(3)
+    integer :: j
+    past = 0
+    do j = 1, size(earlier, 2) - 1
+      past = past + (basset_weight(j) - basset_weight(j + 1)) * earlier(:, j)
+    end do
+    ! The change that leaves the memory takes its remaining weight along: the weights put back
+    ! sum to lagged, the velocity changes telescope and the box's momentum budget closes.
+    j = size(earlier, 2)
+    past = past + basset_weight(j) * earlier(:, j)
+    estimate = lagged * matmul(current, rotation) - history * (basset_weight(1) * matmul(current, rotation) &
+                                                             - matmul(past, rotation))
+  end function put_back
+
+  pure real(wp) function basset_weight(j)
+    integer, intent(in) :: j
+    basset_weight = sqrt(real(j + 1, wp)) - sqrt(real(j, wp))
+  end function basset_weight
 
   !> The last step's ghost-row sweeps (near contact the two bodies' rows couple and need more) and
   !> the bodies' force magnitudes.
@@ -349,12 +409,18 @@ contains
       call h5_write_array(file, 'resolved_hydrodynamics/acceleration', self%acceleration)
       call h5_write_array(file, 'resolved_hydrodynamics/angular_acceleration', self%angular_acceleration)
       call h5_write_array(file, 'resolved_hydrodynamics/dt', self%dt)
+      ! (3, n history_steps): the writer takes rank-2 arrays.
+      call h5_write_array(file, 'resolved_hydrodynamics/earlier_acceleration', &
+                          reshape(self%earlier_acceleration, [3, size(self%earlier_acceleration) / 3]))
+      call h5_write_array(file, 'resolved_hydrodynamics/earlier_angular_acceleration', &
+                          reshape(self%earlier_angular_acceleration, [3, size(self%earlier_angular_acceleration) / 3]))
     end associate
   end subroutine resolved_write_checkpoint
 
   subroutine resolved_read_checkpoint(self, restart)
     class(resolved_hydrodynamics_t), intent(inout) :: self
     type(checkpoint_t), intent(in) :: restart
+    real(wp), allocatable :: flat(:, :)
     associate (file => restart%file)
       call h5_read_array(file, 'resolved_hydrodynamics/force', self%force)
       call h5_read_array(file, 'resolved_hydrodynamics/torque', self%torque)
@@ -363,6 +429,13 @@ contains
       call h5_read_array(file, 'resolved_hydrodynamics/acceleration', self%acceleration)
       call h5_read_array(file, 'resolved_hydrodynamics/angular_acceleration', self%angular_acceleration)
       call h5_read_array(file, 'resolved_hydrodynamics/dt', self%dt)
+      ! A checkpoint from before the history estimate has none: zero (explicit diffusion never uses it).
+      if (h5_exists(file, 'resolved_hydrodynamics/earlier_acceleration')) then
+        call h5_read_array(file, 'resolved_hydrodynamics/earlier_acceleration', flat)
+        self%earlier_acceleration = reshape(flat, shape(self%earlier_acceleration))
+        call h5_read_array(file, 'resolved_hydrodynamics/earlier_angular_acceleration', flat)
+        self%earlier_angular_acceleration = reshape(flat, shape(self%earlier_angular_acceleration))
+      end if
     end associate
     self%inject = .false.
   end subroutine resolved_read_checkpoint
