@@ -40,8 +40,9 @@
 !> whole remaining weight so that the put-back weights sum to M and the box's momentum closes).
 !> With explicit diffusion C and L are zero and the step is the added-mass one above unchanged.
 !> Sub-steps: the particle sub-steps of a long fluid step integrate the frozen load as before; the
-!> placement x^n + U^n dt differs from the particles' x^{n+1} by a dt^2 / 2, O(1e-4) cell at
-!> nu dt/dx^2 = 10 in the validation, below the ghost tolerance of the classification.
+!> placement x^n + U^n dt differs from the particles' x^{n+1} by a dt^2 / 2, and after a collision
+!> within the step by up to the velocity jump times dt / 2 (about 1e-2 of a cell for the validation's
+!> pair at 5 times the explicit bound); the next step places the bodies where the particles are.
 !>
 !> Gravity (&pair gravity, g): each body feels its net weight W = (rho_p - rho_f) V g as a
 !> constant external force (added to the loads), and the whole box (fluid and bodies' nodes) the
@@ -50,8 +51,8 @@
 !> each body, -V sum W / L^3, arrives through the momentum-balance load).
 !>
 !> State across fluid steps: the velocities imposed in the last step (for A^n), the earlier
-!> A^{n-j} (Crank-Nicolson's history estimate) and the loads; all go into the checkpoint (resolved_write_checkpoint), the geometry is recomputed from the
-!> particle state every step.
+!> A^{n-j} (Crank-Nicolson's history estimate) and the loads; all go into the checkpoint
+!> (resolved_write_checkpoint), the geometry is recomputed from the particle state every step.
 module resolved_hydrodynamics
   use agglo_kinds, only: wp
   use error_handling, only: fatal

@@ -1,7 +1,8 @@
 !> Crank-Nicolson with free particles (docs/validation.md, "Crank-Nicolson with free particles"):
 !> the settling sphere of module settling_sphere_case (13^3, D/dx 8.06, phi = 0.125, calcite density
 !> ratio) with explicit diffusion at nu dt/dx^2 = 0.06 and with Crank-Nicolson + hypre at
-!> nu dt/dx^2 = 1, 5, 10 (4 and 40 particle sub-steps), and 1500 steps at 10, against Zick & Homsy (1982, J. Fluid Mech. 115, 13, Table 2) K = 4.292.
+!> nu dt/dx^2 = 1, 5, 10 (4 and 40 particle sub-steps), and 1500 steps at 10, against Zick & Homsy
+!> (1982, J. Fluid Mech. 115, 13, Table 2) K = 4.292.
 program bench_free_cn
   use agglo_kinds, only: wp
   use parallel_env, only: parallel_start, parallel_stop, is_root
@@ -14,7 +15,8 @@ program bench_free_cn
   integer :: k, substeps
   call parallel_start()
   if (is_root()) then
-    print '(a)', '| scheme | nu dt/dx^2 | sub-steps | K | vs Z&H | vs explicit | momentum | steady | steps | wall s |'
+    print '(a)', '| scheme | nu dt/dx^2 | sub-steps | K | vs Z&H | vs explicit | momentum | steady | steps | '// &
+                 'wall s |'
     print '(a)', '|---|---|---|---|---|---|---|---|---|---|'
   end if
   do k = 1, size(numbers)
