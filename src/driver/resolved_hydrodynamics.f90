@@ -328,7 +328,8 @@ contains
       rotation = rotation_matrix(system%bodies(i)%quaternion)
       associate (body => system%bodies(i), other_force => system%dlvo_loads%force(:, i), &
                  other_torque => system%dlvo_loads%torque(:, i))
-        ! Body frame: (m + M) a = F + M A + F_other, M = M_a + C dt; the load is m a - F_other.
+        ! Body frame: (m + M) a = F + E + F_other with M = M_a + C dt + M_B and its put-back E (M_a and
+        ! M_a A with explicit diffusion); the load is m a - F_other.
         total = matmul(self%force(:, i) + self%weight(:, i) + other_force, rotation)
         call lagged_reaction(self%added_mass(:, i), self%translational_resistance(:, i), &
                              self%translational_history_length(:, i), self%dt, self%viscosity, lagged, history)
@@ -349,7 +350,7 @@ contains
   !> The lagged reaction's estimate per body axis (kg, or kg m^2 for rotation; module header):
   !> the impulse / velocity change of a body whose velocity steps at the start of a fluid step,
   !> integrated over the step, M + C dt + C L 2 sqrt(dt / (pi nu)): potential flow, quasi-steady
-  !> drag and the history (Basset) reaction C L / sqrt(pi nu t), whose part is history.
+  !> drag and the history (Basset) reaction C L / sqrt(pi nu t), the last also returned as history.
   pure subroutine lagged_reaction(added, resistance, length, dt, viscosity, reaction, history)
     real(wp), intent(in) :: added(3), resistance(3), length(3), dt, viscosity
     real(wp), intent(out) :: reaction(3), history(3)
