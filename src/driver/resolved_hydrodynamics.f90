@@ -203,6 +203,12 @@ contains
     if (.not. stabilise .and. max(ratio_translation, ratio_rotation) >= 1.0_wp) call log_line('resolved particles: '// &
         'warning: an added mass or inertia above the body''s own with the stabilisation off: the lagged loads '// &
         'amplify a disturbance by that ratio per fluid step (unstable; &scene added_mass = .true.)')
+    if (solver%crank_nicolson .and. stabilise) call log_line('resolved particles: Crank-Nicolson: the '// &
+        'stabilisation''s estimate adds the Stokes drag C dt and the history reaction C L 2 sqrt(dt / (pi nu)) '// &
+        'over the last '//int_text(history_steps)//' fluid steps (docs/theory.md)')
+    if (solver%crank_nicolson .and. .not. stabilise) call log_line('resolved particles: warning: Crank-Nicolson '// &
+        'without the stabilisation: at long steps the lagged drag and history reaction can exceed the body''s mass '// &
+        '(unstable; &scene added_mass = .true.)')
   end subroutine resolved_hydrodynamics_create
 
   !> A body thinner than 4 cells is refused with the grid it needs: the ghost layers of its opposite
