@@ -109,7 +109,8 @@ contains
   end subroutine check_scene_combinations
 
   !> The pair in the resolved fluid: the immersed-boundary coupling ('resolved') imposes the bodies
-  !> with the immersed boundary: explicit diffusion, as for bodies in prescribed motion; particles at
+  !> with the immersed boundary, with either viscous scheme (with Crank-Nicolson the predictor's
+  !> system holds the body rows, docs/theory.md "Crank-Nicolson with free particles"); particles at
   !> least half as dense as the fluid (below, the added-mass stabilisation of a disk's rotation was
   !> measured to ring with a growing amplitude, docs/validation.md "Free particles").
   subroutine check_resolved_pair_cross(cfg)
@@ -118,10 +119,6 @@ contains
       call input_error('pair', 'density', real_text(cfg%pair%density), '>= 0.5 x &fluid density = '// &
                        real_text(0.5_wp * cfg%fluid%density)//' with &scene particle_coupling = ''resolved'' (lighter '// &
                        'particles are not stable with the lagged loads, docs/validation.md "Free particles")')
-    if (cfg%scene%particle_coupling == 'resolved' .and. cfg%fluid%viscous_scheme == 'crank_nicolson') &
-      call input_error('fluid', 'viscous_scheme', '''crank_nicolson'' with &scene particle_coupling = ''resolved''', &
-                       '''explicit'' (the Crank-Nicolson predictor with the immersed-boundary ghost rows is not '// &
-                       'available yet)')
   end subroutine check_resolved_pair_cross
 
   !> The pair in the resolved fluid's periodic box: body 2's minimum image must be the one next to body 1.

@@ -23,36 +23,63 @@
 !> to the particle step is m dU/dt - F_other (I dOmega/dt - T_other), so that the explicit step,
 !> which divides by m (I), moves the body with that acceleration (as point_particle_coupling does).
 !>
+!> Long fluid steps (&fluid viscous_scheme = 'crank_nicolson'; docs/theory.md, "Crank-Nicolson with
+!> free particles"): the ghost and interior rows of the predictor's system (immersed_predictor) hold
+!> the same lagged U^n, Omega^n at t^{n+1} as the explicit path's imposition, so the added-mass
+!> estimate stays consistent; the bodies are reclassified every step as there. At nu dt/dx^2 of
+!> order 1 and above the fluid's reaction to a velocity change within one step is no longer the
+!> potential-flow added mass alone: the Stokes drag C dt and the history (Basset) reaction, whose
+!> impulse over the first step is C L 2 sqrt(dt / (pi nu)) (L = a for a sphere: 6 pi mu a^2 /
+!> sqrt(pi nu t) integrated; for rotation a / 3), grow with dt and reach the body's own mass (the
+!> settling sphere at nu dt/dx^2 = 10 diverged with M_a alone). The estimate M becomes, per body
+!> axis, M_a + C dt + M_B with M_B = C L 2 sqrt(dt / (pi nu)) (C, L from the spheroid's Stokes
+!> resistance, stokes_resistance), taken implicitly as above; and because a velocity change keeps
+!> reacting through its history in later steps (the Basset weights w_j = sqrt(j + 1) - sqrt(j) of a
+!> change j steps back), what that tail will put into the next step's load is taken out of the
+!> put-back (function put_back; history_steps steps remembered, the oldest change leaving with its
+!> whole remaining weight so that the put-back weights sum to M and the box's momentum closes).
+!> With explicit diffusion C and L are zero and the step is the added-mass one above unchanged.
+!> Sub-steps: the particle sub-steps of a long fluid step integrate the frozen load as before; the
+!> placement x^n + U^n dt differs from the particles' x^{n+1} by a dt^2 / 2, and after a collision
+!> within the step by up to the velocity jump times dt / 2 (about 1e-2 of a cell for the validation's
+!> pair at 5 times the explicit bound); the next step places the bodies where the particles are.
+!>
 !> Gravity (&pair gravity, g): each body feels its net weight W = (rho_p - rho_f) V g as a
 !> constant external force (added to the loads), and the whole box (fluid and bodies' nodes) the
 !> uniform drive -sum W / L^3, the mean pressure gradient beyond the hydrostatic one that keeps the
 !> box's total momentum from growing (a settling suspension in a periodic box; the drive's share on
 !> each body, -V sum W / L^3, arrives through the momentum-balance load).
 !>
-!> State across fluid steps: the velocities imposed in the last step (for A^n) and the loads;
-!> both go into the checkpoint (resolved_write_checkpoint), the geometry is recomputed from the
-!> particle state every step.
+!> State across fluid steps: the velocities imposed in the last step (for A^n), the earlier
+!> A^{n-j} (Crank-Nicolson's history estimate) and the loads; all go into the checkpoint
+!> (resolved_write_checkpoint), the geometry is recomputed from the particle state every step.
 module resolved_hydrodynamics
   use agglo_kinds, only: wp
   use error_handling, only: fatal
+  use physical_constants, only: pi
   use logger, only: log_line
   use text_format, only: real_text, int_text
   use checkpoint_files, only: checkpoint_t
-  use hdf5_io, only: h5_write_array, h5_read_array
+  use hdf5_io, only: h5_write_array, h5_read_array, h5_exists
   use fluid_solver, only: fluid_solver_t
   use forcing_driver, only: forcing_driver_t, forcing_driver_evaluate, forcing_driver_advance
   use particle_system, only: particle_system_t, particle_loads_t
   use rigid_body, only: angular_velocity_lab
   use quaternion, only: rotation_matrix, quaternion_from_axis_angle, quaternion_product, quaternion_normalise
   use spheroid, only: spheroid_t
-  use stokes_resistance, only: spheroid_added_mass_coefficients
+  use icosphere_mesh, only: icosphere_mesh_t, build_icosphere_mesh
+  use stokes_resistance, only: spheroid_added_mass_coefficients, stokes_resistance_t, stokes_resistance_of
   use immersed_geometry, only: immersed_body_t, thin_dimension_cells
   use immersed_boundary, only: ibm_settings_t, ibm_set_bodies, ibm_impose, imposition_report_t
   use immersed_scene, only: immersed_scene_t, prescribed_motion_t, immersed_scene_create, immersed_step
   use pair_hydrodynamics, only: pair_hydrodynamics_t
+  use hypre_solver, only: linear_solver_config_t
   implicit none
   private
   public :: resolved_hydrodynamics_t, resolved_hydrodynamics_create, rotational_added_inertia
+
+  !> Fluid steps of velocity changes the history reaction's estimate remembers (Crank-Nicolson).
+  integer, parameter :: history_steps = 32
 
   type, extends(pair_hydrodynamics_t) :: resolved_hydrodynamics_t
     type(immersed_scene_t) :: scene
@@ -64,8 +91,17 @@ module resolved_hydrodynamics
     real(wp), allocatable :: added_mass(:, :)                   !< (3, n) kg, body frame
     real(wp), allocatable :: weight(:, :)                       !< (3, n) N, net weight (rho_p - rho_f) V g (lab)
     real(wp), allocatable :: added_inertia(:, :)                !< (3, n) kg m^2, body frame
+    !> (3, n) body frame, with Crank-Nicolson only (zero with explicit diffusion): the Stokes
+    !> resistances C (N s/m, N m s) and the lengths L (m) of the one-step history reaction in the
+    !> lagged-reaction estimate (module header, "Long fluid steps")
+    real(wp), allocatable :: translational_resistance(:, :), rotational_resistance(:, :)
+    real(wp), allocatable :: translational_history_length(:, :), rotational_history_length(:, :)
+    real(wp) :: viscosity = 0                          !< m^2/s, kinematic
+    type(icosphere_mesh_t), allocatable :: meshes(:)   !< &bodies geometry = 'mesh': each body's (body frame)
     real(wp), allocatable :: imposed_velocity(:, :), imposed_angular_velocity(:, :)   !< (3, n) lab, last step
     real(wp), allocatable :: acceleration(:, :), angular_acceleration(:, :)           !< (3, n) lab, A^n, Alpha^n
+    !> (3, n, history_steps) lab: A^{n-1}, A^{n-2}, ... (and Alpha), the history reaction's past (Crank-Nicolson)
+    real(wp), allocatable :: earlier_acceleration(:, :, :), earlier_angular_acceleration(:, :, :)
   contains
     procedure :: prepare => resolved_prepare
     procedure :: fluid_step => resolved_fluid_step
@@ -81,9 +117,12 @@ contains
   !> settings: the imposition (&scene ibm_coupling, &bodies ghost_tolerance, max_sweeps);
   !> load_method, surface_level: as immersed_scene_create (&bodies load_method, mesh_level);
   !> stabilise: the added-mass stabilisation; restart: the fluid already holds the bodies;
-  !> gravity: m/s^2 (module header).
+  !> gravity: m/s^2 (module header); predictor_config: the hypre solve of the Crank-Nicolson
+  !> predictor (&fluid predictor_tolerance, predictor_max_iterations; immersed_scene_create's default
+  !> when absent); geometry_level: &bodies geometry = 'mesh', the icosphere level of the surface
+  !> the ghost nodes see (20 4^level faces, inside the spheroid; absent or -1: the analytic spheroid).
   subroutine resolved_hydrodynamics_create(provider, solver, system, settings, load_method, surface_level, &
-                                           stabilise, restart, gravity)
+                                           stabilise, restart, gravity, predictor_config, geometry_level)
     type(resolved_hydrodynamics_t), intent(out) :: provider
     type(fluid_solver_t), intent(inout) :: solver
     type(particle_system_t), intent(in) :: system
@@ -92,32 +131,59 @@ contains
     integer, intent(in) :: surface_level
     logical, intent(in) :: stabilise, restart
     real(wp), intent(in) :: gravity(3)
+    type(linear_solver_config_t), intent(in), optional :: predictor_config
+    integer, intent(in), optional :: geometry_level
     type(prescribed_motion_t), allocatable :: motion(:)
     real(wp) :: k(2), fluid_mass, ratio_translation, ratio_rotation
+    type(stokes_resistance_t) :: resistance
     integer :: i
     provider%box = [solver%grid%lx, solver%grid%ly, solver%grid%lz]
     allocate(motion(system%n))
     allocate(provider%added_mass(3, system%n), provider%added_inertia(3, system%n), provider%weight(3, system%n))
+    allocate(provider%translational_resistance(3, system%n), provider%rotational_resistance(3, system%n))
+    allocate(provider%translational_history_length(3, system%n), provider%rotational_history_length(3, system%n))
+    provider%translational_resistance = 0
+    provider%rotational_resistance = 0
+    provider%translational_history_length = provider%translational_resistance
+    provider%rotational_history_length = provider%translational_resistance
+    provider%viscosity = solver%viscosity
     ratio_translation = 0
     ratio_rotation = 0
+    if (present(geometry_level)) then
+      if (geometry_level >= 0) allocate(provider%meshes(system%n))
+    end if
     do i = 1, system%n
       call require_thick_enough(system%shapes(i), solver)
       ! At rest where the particle is: the scene's first placement; every step places the bodies anew.
       motion(i)%shape = system%shapes(i)
       motion(i)%centre = system%bodies(i)%position
       motion(i)%orientation = system%bodies(i)%quaternion
+      if (allocated(provider%meshes)) then
+        call build_icosphere_mesh(system%shapes(i), geometry_level, provider%meshes(i))
+        motion(i)%mesh = provider%meshes(i)
+      end if
       fluid_mass = solver%density * system%shapes(i)%volume
       provider%weight(:, i) = (system%bodies(i)%mass - fluid_mass) * gravity
       k = spheroid_added_mass_coefficients(system%shapes(i)%a, system%shapes(i)%b)
       provider%added_mass(:, i) = fluid_mass * [k(1), k(2), k(2)]
       provider%added_inertia(:, i) = [0.0_wp, 1.0_wp, 1.0_wp] * &
                                      rotational_added_inertia(system%shapes(i), solver%density)
+      if (solver%crank_nicolson) then
+        resistance = stokes_resistance_of(system%shapes(i), solver%density * solver%viscosity)
+        provider%translational_resistance(:, i) = resistance%translational
+        provider%rotational_resistance(:, i) = resistance%rotational
+        ! The sphere's lengths a (Basset) and a / 3 (the rotating sphere's boundary layer), from the
+        ! resistances' equivalent radii C / (6 pi mu) and (C_r / (8 pi mu))^(1/3) for a spheroid.
+        provider%translational_history_length(:, i) = resistance%translational / (6.0_wp * pi * resistance%dynamic_viscosity)
+        provider%rotational_history_length(:, i) = (resistance%rotational / (8.0_wp * pi * resistance%dynamic_viscosity)) &
+                                                   **(1.0_wp / 3.0_wp) / 3.0_wp
+      end if
       ratio_translation = max(ratio_translation, maxval(provider%added_mass(:, i)) / system%bodies(i)%mass)
       ratio_rotation = max(ratio_rotation, maxval(provider%added_inertia(:, i) / system%bodies(i)%inertia_body))
     end do
     call immersed_scene_create(provider%scene, solver, motion, settings, &
                                -sum(provider%weight, dim=2) / (provider%box(1) * provider%box(2) * provider%box(3)), &
-                               load_method, surface_level)
+                               load_method, surface_level, predictor_config)
     allocate(provider%force(3, system%n), provider%torque(3, system%n))
     provider%force = 0
     provider%torque = 0
@@ -125,6 +191,10 @@ contains
     provider%imposed_angular_velocity = provider%force
     provider%acceleration = provider%force
     provider%angular_acceleration = provider%force
+    allocate(provider%earlier_acceleration(3, system%n, history_steps), &
+             provider%earlier_angular_acceleration(3, system%n, history_steps))
+    provider%earlier_acceleration = 0
+    provider%earlier_angular_acceleration = 0
     provider%stabilise = stabilise
     provider%inject = .not. restart
     call log_line('resolved particles: largest added mass / mass '//real_text(ratio_translation)// &
@@ -133,6 +203,12 @@ contains
     if (.not. stabilise .and. max(ratio_translation, ratio_rotation) >= 1.0_wp) call log_line('resolved particles: '// &
         'warning: an added mass or inertia above the body''s own with the stabilisation off: the lagged loads '// &
         'amplify a disturbance by that ratio per fluid step (unstable; &scene added_mass = .true.)')
+    if (solver%crank_nicolson .and. stabilise) call log_line('resolved particles: Crank-Nicolson: the '// &
+        'stabilisation''s estimate adds the Stokes drag C dt and the history reaction C L 2 sqrt(dt / (pi nu)) '// &
+        'over the last '//int_text(history_steps)//' fluid steps (docs/theory.md)')
+    if (solver%crank_nicolson .and. .not. stabilise) call log_line('resolved particles: warning: Crank-Nicolson '// &
+        'without the stabilisation: at long steps the lagged drag and history reaction can exceed the body''s mass '// &
+        '(unstable; &scene added_mass = .true.)')
   end subroutine resolved_hydrodynamics_create
 
   !> A body thinner than 4 cells is refused with the grid it needs: the ghost layers of its opposite
@@ -210,6 +286,10 @@ contains
     self%force = self%scene%force
     self%torque = self%scene%torque
     self%dt = dt
+    self%earlier_acceleration = eoshift(self%earlier_acceleration, shift=-1, boundary=0.0_wp, dim=3)
+    self%earlier_acceleration(:, :, 1) = self%acceleration
+    self%earlier_angular_acceleration = eoshift(self%earlier_angular_acceleration, shift=-1, boundary=0.0_wp, dim=3)
+    self%earlier_angular_acceleration(:, :, 1) = self%angular_acceleration
     self%acceleration = (self%imposed_velocity - previous) / dt
     self%angular_acceleration = (self%imposed_angular_velocity - previous_angular) / dt
   end subroutine resolved_fluid_step
@@ -227,6 +307,7 @@ contains
     do i = 1, system%n
       omega = angular_velocity_lab(system%bodies(i))
       bodies(i)%shape = system%shapes(i)
+      if (allocated(self%meshes)) bodies(i)%mesh = self%meshes(i)
       bodies(i)%centre = modulo(system%bodies(i)%position + lead * system%bodies(i)%velocity, self%box)
       bodies(i)%orientation = quaternion_normalise(quaternion_product( &
           quaternion_from_axis_angle(omega, norm2(omega) * lead), system%bodies(i)%quaternion))
@@ -241,7 +322,7 @@ contains
     type(particle_system_t), intent(in) :: system
     real(wp), intent(in) :: theta
     type(particle_loads_t), intent(inout) :: loads
-    real(wp) :: rotation(3, 3), total(3), estimate(3), rate(3)
+    real(wp) :: rotation(3, 3), total(3), estimate(3), rate(3), lagged(3), history(3)
     integer :: i
     if (.not. (theta >= 0.0_wp .and. theta <= 1.0_wp)) call fatal('resolved particles: loads at theta outside [0, 1]')
     do i = 1, system%n
@@ -253,18 +334,62 @@ contains
       rotation = rotation_matrix(system%bodies(i)%quaternion)
       associate (body => system%bodies(i), other_force => system%dlvo_loads%force(:, i), &
                  other_torque => system%dlvo_loads%torque(:, i))
-        ! Body frame: (m + M_a) a = F + M_a A + F_other; the load is m a - F_other.
+        ! Body frame: (m + M) a = F + E + F_other with M = M_a + C dt + M_B and its put-back E (M_a and
+        ! M_a A with explicit diffusion); the load is m a - F_other.
         total = matmul(self%force(:, i) + self%weight(:, i) + other_force, rotation)
-        estimate = matmul(self%acceleration(:, i), rotation)
-        rate = (total + self%added_mass(:, i) * estimate) / (body%mass + self%added_mass(:, i))
+        call lagged_reaction(self%added_mass(:, i), self%translational_resistance(:, i), &
+                             self%translational_history_length(:, i), self%dt, self%viscosity, lagged, history)
+        estimate = put_back(lagged, history, self%acceleration(:, i), self%earlier_acceleration(:, i, :), rotation)
+        rate = (total + estimate) / (body%mass + lagged)
         loads%force(:, i) = body%mass * matmul(rotation, rate) - other_force   ! the weight included
         total = matmul(self%torque(:, i) + other_torque, rotation)
-        estimate = matmul(self%angular_acceleration(:, i), rotation)
-        rate = (total + self%added_inertia(:, i) * estimate) / (body%inertia_body + self%added_inertia(:, i))
+        call lagged_reaction(self%added_inertia(:, i), self%rotational_resistance(:, i), &
+                             self%rotational_history_length(:, i), self%dt, self%viscosity, lagged, history)
+        estimate = put_back(lagged, history, self%angular_acceleration(:, i), &
+                            self%earlier_angular_acceleration(:, i, :), rotation)
+        rate = (total + estimate) / (body%inertia_body + lagged)
         loads%torque(:, i) = matmul(rotation, body%inertia_body * rate) - other_torque
       end associate
     end do
   end subroutine resolved_loads
+
+  !> The lagged reaction's estimate per body axis (kg, or kg m^2 for rotation; module header):
+  !> the impulse / velocity change of a body whose velocity steps at the start of a fluid step,
+  !> integrated over the step, M + C dt + C L 2 sqrt(dt / (pi nu)): potential flow, quasi-steady
+  !> drag and the history (Basset) reaction C L / sqrt(pi nu t), the last also returned as history.
+  pure subroutine lagged_reaction(added, resistance, length, dt, viscosity, reaction, history)
+    real(wp), intent(in) :: added(3), resistance(3), length(3), dt, viscosity
+    real(wp), intent(out) :: reaction(3), history(3)
+    history = 0
+    if (dt > 0.0_wp .and. viscosity > 0.0_wp) history = resistance * 2.0_wp * length * sqrt(dt / (pi * viscosity))
+    reaction = added + resistance * dt + history
+  end subroutine lagged_reaction
+
+  !> The estimate put back into the lagged load (body frame): the reaction the last step's velocity
+  !> change A^n caused, less what the history reaction of each change still holds in the next step
+  !> (the Basset weights w_j = sqrt(j + 1) - sqrt(j) of a velocity step j steps back), over the
+  !> N = history_steps steps remembered:
+  !>   lagged A^n - history [w_1 A^n - sum_{j=1}^{N-1} (w_j - w_{j+1}) A^{n-j} - w_N A^{n-N}].
+  pure function put_back(lagged, history, current, earlier, rotation) result(estimate)
+    real(wp), intent(in) :: lagged(3), history(3), current(3), earlier(:, :), rotation(3, 3)
+    real(wp) :: estimate(3), past(3)
+    integer :: j
+    past = 0
+    do j = 1, size(earlier, 2) - 1
+      past = past + (basset_weight(j) - basset_weight(j + 1)) * earlier(:, j)
+    end do
+    ! The change that leaves the memory takes its remaining weight along: the weights put back
+    ! sum to lagged, the velocity changes telescope and the box's momentum budget closes.
+    j = size(earlier, 2)
+    past = past + basset_weight(j) * earlier(:, j)
+    estimate = lagged * matmul(current, rotation) - history * (basset_weight(1) * matmul(current, rotation) &
+                                                             - matmul(past, rotation))
+  end function put_back
+
+  pure real(wp) function basset_weight(j)
+    integer, intent(in) :: j
+    basset_weight = sqrt(real(j + 1, wp)) - sqrt(real(j, wp))
+  end function basset_weight
 
   !> The last step's ghost-row sweeps (near contact the two bodies' rows couple and need more) and
   !> the bodies' force magnitudes.
@@ -292,12 +417,18 @@ contains
       call h5_write_array(file, 'resolved_hydrodynamics/acceleration', self%acceleration)
       call h5_write_array(file, 'resolved_hydrodynamics/angular_acceleration', self%angular_acceleration)
       call h5_write_array(file, 'resolved_hydrodynamics/dt', self%dt)
+      ! (3, n history_steps): the writer takes rank-2 arrays.
+      call h5_write_array(file, 'resolved_hydrodynamics/earlier_acceleration', &
+                          reshape(self%earlier_acceleration, [3, size(self%earlier_acceleration) / 3]))
+      call h5_write_array(file, 'resolved_hydrodynamics/earlier_angular_acceleration', &
+                          reshape(self%earlier_angular_acceleration, [3, size(self%earlier_angular_acceleration) / 3]))
     end associate
   end subroutine resolved_write_checkpoint
 
   subroutine resolved_read_checkpoint(self, restart)
     class(resolved_hydrodynamics_t), intent(inout) :: self
     type(checkpoint_t), intent(in) :: restart
+    real(wp), allocatable :: flat(:, :)
     associate (file => restart%file)
       call h5_read_array(file, 'resolved_hydrodynamics/force', self%force)
       call h5_read_array(file, 'resolved_hydrodynamics/torque', self%torque)
@@ -306,6 +437,13 @@ contains
       call h5_read_array(file, 'resolved_hydrodynamics/acceleration', self%acceleration)
       call h5_read_array(file, 'resolved_hydrodynamics/angular_acceleration', self%angular_acceleration)
       call h5_read_array(file, 'resolved_hydrodynamics/dt', self%dt)
+      ! A checkpoint from before the history estimate has none: zero (explicit diffusion never uses it).
+      if (h5_exists(file, 'resolved_hydrodynamics/earlier_acceleration')) then
+        call h5_read_array(file, 'resolved_hydrodynamics/earlier_acceleration', flat)
+        self%earlier_acceleration = reshape(flat, shape(self%earlier_acceleration))
+        call h5_read_array(file, 'resolved_hydrodynamics/earlier_angular_acceleration', flat)
+        self%earlier_angular_acceleration = reshape(flat, shape(self%earlier_angular_acceleration))
+      end if
     end associate
     self%inject = .false.
   end subroutine resolved_read_checkpoint

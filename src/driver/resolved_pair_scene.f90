@@ -60,6 +60,7 @@ module resolved_pair_scene
   use point_hydrodynamics, only: point_hydrodynamics_t, point_hydrodynamics_create
   use resolved_hydrodynamics, only: resolved_hydrodynamics_t, resolved_hydrodynamics_create
   use immersed_boundary, only: ibm_settings_t
+  use immersed_predictor, only: default_predictor_config
   use point_particle_coupling, only: local_rotation, sample_velocity
   implicit none
   private
@@ -273,7 +274,7 @@ contains
       call move_alloc(point, hydrodynamics)
     case ('resolved')
       ! The imposition as for bodies in prescribed motion (&scene ibm_coupling, &bodies ghost_tolerance,
-      ! max_sweeps, load_method, mesh_level); the bodies themselves are the pair's.
+      ! max_sweeps, load_method, geometry, mesh_level; &fluid predictor_*); the bodies themselves are the pair's.
       settings%coupling = cfg%scene%ibm_coupling
       settings%tolerance = cfg%bodies%ghost_tolerance
       settings%max_sweeps = cfg%bodies%max_sweeps
@@ -282,7 +283,10 @@ contains
       call resolved_hydrodynamics_create(resolved, solver, system, settings, cfg%bodies%load_method, &
                                          merge(cfg%bodies%mesh_level, -1, cfg%bodies%load_method == 'surface' .or. &
                                                cfg%bodies%compare_loads), &
-                                         cfg%scene%added_mass, cfg%run%restart, cfg%pair%gravity)
+                                         cfg%scene%added_mass, cfg%run%restart, cfg%pair%gravity, &
+                                         default_predictor_config(cfg%fluid%predictor_tolerance, &
+                                                                  cfg%fluid%predictor_max_iterations), &
+                                         merge(cfg%bodies%mesh_level, -1, cfg%bodies%geometry == 'mesh'))
       call move_alloc(resolved, hydrodynamics)
     case default
       ! The deck checks allow only 'point' and 'resolved'.

@@ -37,6 +37,7 @@ module settling_sphere_case
     logical :: stabilise = .true.                !< the added-mass stabilisation
     integer :: substeps = 4                      !< particle sub-steps per fluid step
     real(wp) :: viscous_number = 0.06_wp         !< nu dt / dx^2
+    character(len=16) :: viscous_scheme = 'explicit'   !< &fluid viscous_scheme: 'explicit' | 'crank_nicolson'
     real(wp) :: steady_tolerance = 1.0e-8_wp
     integer :: max_steps = 20000
     real(wp) :: offset_cells(3) = [0.13_wp, 0.27_wp, 0.41_wp]   !< sphere centre - box centre, cells
@@ -82,7 +83,7 @@ contains
     grid_cfg = grid_config_t(nx=n, ny=n, nz=n, length_x=box, length_y=box, length_z=box)
     fluid_cfg%density = density
     fluid_cfg%viscosity = viscosity
-    fluid_cfg%viscous_scheme = 'explicit'
+    fluid_cfg%viscous_scheme = case%viscous_scheme
     fluid_cfg%pressure_scheme = 'incremental'
     call fluid_solver_create(solver, grid_cfg, fluid_cfg)
     solver%u = 0; solver%v = 0; solver%w = 0; solver%pressure = 0
