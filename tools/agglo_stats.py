@@ -101,8 +101,8 @@ def is_fluid_run(directory):
     return any(has(m) for m in FLUID_MARKERS) and not (has("summary.json") or has("particles.h5"))
 
 
-HISTORY_METRICS = ("max_particle_speed", "chi_eta_first_collision", "contact_episodes",
-                   "carried_distance", "close_fraction", "radius")
+HISTORY_METRICS = ("max_particle_speed", "chi_eta_first_collision", "lever_arm_first_collision",
+                   "contact_episodes", "carried_distance", "close_fraction", "radius")
 # Between two collisions of one contact episode the gap stays below this many detection floors; a
 # pair whose gap rises above it between two collisions has separated and come back (a new episode).
 EPISODE_FLOORS = 10.0
@@ -127,6 +127,24 @@ def contact_episodes(event_times, time, gap, threshold):
     return 1 + int(np.count_nonzero(separated))
 
 
+def lever_arm(time, contact_time, points, centres, radius):
+    """Mean over both particles of |(c_k - x_k) x n| / r at the last row before contact_time:
+    the lever arm of the contact about each centre (c_k closest point, x_k centre, n the unit
+    vector from c_1 to c_2, r the radius). 0 for a central contact, where the whole normal
+    rebound goes into the centres' motion; large when the contact is far off the centre line and
+    the rebound turns the bodies (1/m_eff = 1/m + (r x n)^2 / I). Positions are differences
+    within one body, so the periodic wrap of the centres does not enter; None when undefined."""
+    import numpy as np
+    row = max(0, int(np.searchsorted(time, contact_time)) - 1)
+    normal = points[1][row] - points[0][row]
+    length = np.linalg.norm(normal)
+    if not length > 0.0:
+        return None
+    normal = normal / length
+    arms = [np.linalg.norm(np.cross(points[k][row] - centres[k][row], normal)) / radius for k in (0, 1)]
+    return float(0.5 * (arms[0] + arms[1]))
+
+
 def history_metrics(run):
     """The HISTORY_METRICS of one run from its particles.h5 (every value None without the file)."""
     import numpy as np
@@ -141,6 +159,8 @@ def history_metrics(run):
         v1 = np.asarray(h5["particle1/velocity"][:], float)
         v2 = np.asarray(h5["particle2/velocity"][:], float)
         chi = np.asarray(h5["pair/chi_eta"][:], float) if "pair/chi_eta" in h5 else None
+        points = [np.asarray(h5[f"pair/closest_point{k}"][:], float) for k in (1, 2)]
+        centres = [np.asarray(h5[f"particle{k}/position"][:], float) for k in (1, 2)]
         events = np.asarray(h5["events/time"][:], float) if "events/time" in h5 else np.empty(0)
         # /radius is a dataset in the code's files; an attribute in older or hand-made ones.
         radius = h5["radius"][()] if "radius" in h5 else h5.attrs.get("radius")
@@ -153,6 +173,8 @@ def history_metrics(run):
     first = run.summary["first_collision"]
     if first is not None and chi is not None and chi.size:
         values["chi_eta_first_collision"] = float(chi[np.argmin(np.abs(time - first["time"]))])
+    if first is not None and radius is not None:
+        values["lever_arm_first_collision"] = lever_arm(time, first["time"], points, centres, radius)
     values["contact_episodes"] = contact_episodes(events, time, gap, EPISODE_FLOORS * run.detection_floor)
     midpoint = np.linalg.norm(0.5 * (v1 + v2), axis=1)
     values["carried_distance"] = float(np.sum(0.5 * (midpoint[1:] + midpoint[:-1]) * np.diff(time)))
@@ -279,8 +301,8 @@ RUN_COLUMNS = ("batch", "run", "group", "name", "seed", "shape", "aspect_ratio",
                "collisions", "first_collision_time", "theta1", "phi1", "theta2", "phi2", "psi",
                "normal_velocity_before", "normal_velocity_after", "max_vdw_force", "final_gap",
                "final_relative_velocity", "psi_final", "end_time", "steps", "wall_time",
-               "max_particle_speed", "chi_eta_first_collision", "contact_episodes",
-               "carried_distance", "close_fraction")
+               "max_particle_speed", "chi_eta_first_collision", "lever_arm_first_collision",
+               "contact_episodes", "carried_distance", "close_fraction")
 
 
 def run_row(run):

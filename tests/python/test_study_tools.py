@@ -13,7 +13,7 @@ import h5py
 import numpy as np
 import pytest
 
-from agglo_stats import contact_episodes
+from agglo_stats import contact_episodes, lever_arm
 from conftest import AGGLO_STATS, REPO, run_tool
 from fake_pair_scene import write_run
 from speed_accuracy import pareto_front
@@ -50,6 +50,20 @@ def test_contact_episodes_counts_separations_between_collisions():
     assert contact_episodes(events, time, gap, 10.0e-9) == 3
     assert contact_episodes([], time, gap, 10.0e-9) == 0
     assert contact_episodes([4.0], time, gap, 10.0e-9) == 1
+
+
+def test_lever_arm_of_a_contact():
+    """Two unit spheres touching off their centre line: the contact normal along x, the contact
+    point 0.6 off the line through each centre along y: lever arm 0.6 r; a central contact 0."""
+    r = 2.0
+    time = np.array([0.0, 1.0, 2.0])
+    centres = [np.tile([0.0, 0.0, 0.0], (3, 1)), np.tile([2.0 * 0.8 * r, 0.0, 0.0], (3, 1))]
+    point = np.array([0.8 * r, 0.6 * r, 0.0])
+    points = [np.tile(point, (3, 1)), np.tile(point + [1.0e-9, 0.0, 0.0], (3, 1))]
+    assert lever_arm(time, 1.5, points, centres, r) == pytest.approx(0.6, rel=1e-9)
+    points = [np.tile([r, 0.0, 0.0], (3, 1)), np.tile([r + 1.0e-9, 0.0, 0.0], (3, 1))]
+    assert lever_arm(time, 1.5, points, centres, r) == pytest.approx(0.0, abs=1e-12)
+    assert lever_arm(time, 1.5, [points[0], points[0]], centres, r) is None
 
 
 # ---------------------------------------------------------------------------------------------
