@@ -76,7 +76,8 @@ class Run:
         chi_eta_first_collision (the row nearest the first collision), contact_episodes (see
         contact_episodes), carried_distance (m, path of the pair's midpoint, the integral of
         |v1 + v2| / 2 dt), close_fraction (share of the run time after the first collision with
-        the gap below CLOSE_GAP_RADII radii; 0 without contact), radius (m)."""
+        the gap below CLOSE_GAP_RADII radii; 0 without contact), relative_path (m, the integral
+        of |v2 - v1| dt: how far the particles moved relative to each other), radius (m)."""
         if self._metrics is None:
             self._metrics = history_metrics(self)
         return self._metrics
@@ -102,7 +103,7 @@ def is_fluid_run(directory):
 
 
 HISTORY_METRICS = ("max_particle_speed", "chi_eta_first_collision", "lever_arm_first_collision",
-                   "contact_episodes", "carried_distance", "close_fraction", "radius")
+                   "contact_episodes", "carried_distance", "relative_path", "close_fraction", "radius")
 # Between two collisions of one contact episode the gap stays below this many detection floors; a
 # pair whose gap rises above it between two collisions has separated and come back (a new episode).
 EPISODE_FLOORS = 10.0
@@ -176,8 +177,10 @@ def history_metrics(run):
     if first is not None and radius is not None:
         values["lever_arm_first_collision"] = lever_arm(time, first["time"], points, centres, radius)
     values["contact_episodes"] = contact_episodes(events, time, gap, EPISODE_FLOORS * run.detection_floor)
-    midpoint = np.linalg.norm(0.5 * (v1 + v2), axis=1)
-    values["carried_distance"] = float(np.sum(0.5 * (midpoint[1:] + midpoint[:-1]) * np.diff(time)))
+    def path(speed):                      # trapezoidal integral of a speed over the rows
+        return float(np.sum(0.5 * (speed[1:] + speed[:-1]) * np.diff(time)))
+    values["carried_distance"] = path(np.linalg.norm(0.5 * (v1 + v2), axis=1))
+    values["relative_path"] = path(np.linalg.norm(v2 - v1, axis=1))
     values["close_fraction"] = 0.0
     if first is not None and radius is not None and time[-1] > first["time"]:
         after = time >= first["time"]
@@ -302,7 +305,7 @@ RUN_COLUMNS = ("batch", "run", "group", "name", "seed", "shape", "aspect_ratio",
                "normal_velocity_before", "normal_velocity_after", "max_vdw_force", "final_gap",
                "final_relative_velocity", "psi_final", "end_time", "steps", "wall_time",
                "max_particle_speed", "chi_eta_first_collision", "lever_arm_first_collision",
-               "contact_episodes", "carried_distance", "close_fraction")
+               "contact_episodes", "carried_distance", "relative_path", "close_fraction")
 
 
 def run_row(run):
@@ -702,14 +705,23 @@ def _successive_collisions(run):
     return float(episodes)
 
 
+# The carried-together rule: the pair's midpoint travels at least this many radii (10 um for the
+# paper's particles, about the path of the flow at u_rms over 1.3 ms), and farther than the
+# particles move relative to each other: the pair moves as one, with the flow.
+CARRIED_RADII = 0.2
+
+
 def _carried_together(run):
-    """Not agglomerated, carried at least one radius by the flow (midpoint path) and close after
-    the first collision; score: the share of the time after it with the gap below
-    CLOSE_GAP_RADII radii."""
+    """Collided, not agglomerated, carried (midpoint path >= CARRIED_RADII radii and >= the
+    relative path) and close after the first collision; score: the share of the time after it
+    with the gap below CLOSE_GAP_RADII radii."""
     metrics = run.metrics()
     if run.summary["outcome"] == "agglomerated" or run.summary["first_collision"] is None:
         return None
-    if metrics["radius"] is None or (metrics["carried_distance"] or 0.0) < metrics["radius"]:
+    if metrics["radius"] is None or metrics["carried_distance"] is None:
+        return None
+    if (metrics["carried_distance"] < CARRIED_RADII * metrics["radius"]
+            or metrics["carried_distance"] < metrics["relative_path"]):
         return None
     return metrics["close_fraction"] or None
 

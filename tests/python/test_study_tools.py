@@ -120,6 +120,8 @@ def test_history_metrics_means_and_illustrative_runs(spaced_tmp):
     assert runs["run_0003"]["contact_episodes"] == "2"
     assert runs["run_0001"]["contact_episodes"] == "1"
     assert float(runs["run_0007"]["carried_distance"]) == pytest.approx(1.0e-4, rel=1e-6)
+    # Relative path: 5 um of approach, then the rebound at 0.4 mm/s for the remaining 5 ms.
+    assert float(runs["run_0007"]["relative_path"]) == pytest.approx(5.0e-6 + 0.4e-3 * 5.0e-3, rel=0.02)
     # Means over every history row of the group.
     means = read_csv(out / "history_means.csv")[0]
     gaps = []
