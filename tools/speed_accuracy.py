@@ -13,6 +13,7 @@ reference batch of the same shape on the seeds complete in both (tools/study_com
   vmax_error          median |v_max - v_max,ref| / v_max,ref, v_max the largest particle speed
   cost_run_s          median wall time of a run of the variant (summary.json wall_time, s)
   cost_per_ms_s       median wall seconds per simulated millisecond of the variant
+  cost_ratio          cost_per_ms_s of the variant over that of its reference (< 1: cheaper)
 
 The reference's own cost is given as well (the reference row, errors 0 by definition). Writes
 OUT/comparison.csv, OUT/speed_accuracy.md (a markdown table per knob) and OUT/pareto_<metric>.png
@@ -39,7 +40,7 @@ METRICS = (("outcome_disagreement", "1 - outcome agreement"),
            ("vmax_error", "maximum particle speed, median relative error"))
 COLUMNS = ("knob", "variant", "shape", "reference", "paired_runs", "outcome_agreement",
            "agreement_low", "agreement_high", "vn_error", "vn_runs", "chi_error", "chi_runs",
-           "vmax_error", "vmax_runs", "cost_run_s", "cost_per_ms_s", "status")
+           "vmax_error", "vmax_runs", "cost_run_s", "cost_per_ms_s", "cost_ratio", "status")
 
 
 class ManifestError(Exception):
@@ -119,7 +120,13 @@ def compare_row(row, reference_batch):
 def analyse(manifest_rows):
     """COLUMNS rows for every manifest row, in manifest order."""
     batches = {(row["shape"], row["variant"]): row["batch"] for row in manifest_rows}
-    return [compare_row(row, batches.get((row["shape"], row["reference"]))) for row in manifest_rows]
+    rows = [compare_row(row, batches.get((row["shape"], row["reference"]))) for row in manifest_rows]
+    cost = {(row["shape"], row["variant"]): row["cost_per_ms_s"] for row in rows}
+    for row in rows:
+        reference = cost.get((row["shape"], row["reference"]), "")
+        if row["cost_per_ms_s"] != "" and reference not in ("", 0, 0.0):
+            row["cost_ratio"] = row["cost_per_ms_s"] / reference
+    return rows
 
 
 def _format(value, form):
@@ -132,8 +139,9 @@ def markdown(rows):
     for knob in dict.fromkeys(row["knob"] for row in rows):
         lines += [f"### {knob}", "",
                   "| shape | variant | reference | paired runs | outcome agreement [Wilson 95%] | "
-                  "v_n error | chi_eta error | v_max error | wall s / run | wall s / simulated ms | status |",
-                  "|---|---|---|---|---|---|---|---|---|---|---|"]
+                  "v_n error | chi_eta error | v_max error | wall s / run | wall s / simulated ms | "
+                  "cost / reference | status |",
+                  "|---|---|---|---|---|---|---|---|---|---|---|---|"]
         for row in (r for r in rows if r["knob"] == knob):
             agreement = _format(row["outcome_agreement"], ".3f")
             if row["agreement_low"] != "":
@@ -142,7 +150,7 @@ def markdown(rows):
                          f"{row['paired_runs'] or '–'} | {agreement} | {_format(row['vn_error'], '.3g')} | "
                          f"{_format(row['chi_error'], '.3g')} | {_format(row['vmax_error'], '.3g')} | "
                          f"{_format(row['cost_run_s'], '.3g')} | {_format(row['cost_per_ms_s'], '.3g')} | "
-                         f"{row['status']} |")
+                         f"{_format(row['cost_ratio'], '.3g')} | {row['status']} |")
         lines.append("")
     return "\n".join(lines)
 

@@ -202,6 +202,7 @@ def test_speed_accuracy_metrics_table_and_plots(spaced_tmp):
     assert float(cheap["vn_error"]) == pytest.approx(0.1, rel=1e-9)
     # Fake runs: wall 0.01 s over 10 ms simulated -> 1e-3 s per simulated ms.
     assert float(cheap["cost_per_ms_s"]) == pytest.approx(1.0e-3, rel=1e-9)
+    assert float(cheap["cost_ratio"]) == pytest.approx(1.0, rel=1e-9)      # same fake cost
     assert rows["base"]["status"] == "reference"
     assert rows["missing"]["status"] == "not run"
     table = (out / "speed_accuracy.md").read_text()
