@@ -34,6 +34,10 @@ Common options:
       --keep-checkpoints   keep each complete run's checkpoints (default: deleted after the batch,
                            they are only needed to restart an interrupted run: about 100 MB at 128^3)
       --no-analysis        skip the statistics and figures at the end
+      --publish            after the analysis, copy its figures (PNG) and small tables (rates,
+                           means, illustrative runs, comparisons, costs; not runs.csv) into
+                           docs/figures/<study>/ (or $AGGLO_STUDY_PUBLISH_DIR) as
+                           <stats directory>_<file>, the output root removed from paths inside
   -h, --help               this text
 
 Resumable: call the same command again; complete runs are skipped (tools/montecarlo.sh), a
@@ -48,7 +52,7 @@ EOF
 study_parse_arguments() {
   study_out="output/$study_name" study_seed=1001 study_jobs=1 study_jobs_given=0 study_ranks=2
   study_launcher='' study_time='' study_only='' study_mode=run study_keep_checkpoints=0
-  study_analysis=1
+  study_analysis=1 study_publish=0
   study_sbatch_options=()
   study_extra_arguments=()
   while [ $# -gt 0 ]; do
@@ -66,6 +70,7 @@ study_parse_arguments() {
       --sbatch-option) study_sbatch_options+=("${2:?--sbatch-option needs a value}"); shift 2 ;;
       --keep-checkpoints) study_keep_checkpoints=1; shift ;;
       --no-analysis) study_analysis=0; shift ;;
+      --publish) study_publish=1; shift ;;
       -h|--help) study_usage_specific; echo; study_usage_common; exit 0 ;;
       *) study_extra_arguments+=("$1"); shift ;;
     esac
@@ -239,6 +244,25 @@ study_costs() {
     || study_status_all=1
 }
 
+# study_publish_results: the analysis' figures and small tables into docs/figures/<study>/, with
+# the study's output root removed from the paths inside (no machine paths in the repository).
+study_publish_results() {
+  local target="${AGGLO_STUDY_PUBLISH_DIR:-$study_repo/docs/figures/$study_name}" file name directory
+  mkdir -p "$target" || { study_status_all=1; return; }
+  for file in "$study_out"/stats-*/*.png "$study_out"/stats-*/{rates,history_means,illustrative}.csv \
+              "$study_out"/analysis/*.png "$study_out"/analysis/{comparison.csv,speed_accuracy.md} \
+              "$study_out"/{comparison.csv,batch_costs.tsv,batch_times.tsv} "$study_out"/transitions-*.csv; do
+    [ -f "$file" ] || continue
+    directory=$(basename "$(dirname "$file")"); name=$(basename "$file")
+    [ "$(dirname "$file")" = "$study_out" ] || name="${directory}_$name"
+    case "$name" in
+      *.png) cp "$file" "$target/$name" ;;
+      *) sed -e "s|$(cd "$study_out" && pwd -P)/||g" -e "s|$study_out/||g" "$file" > "$target/$name" ;;
+    esac
+  done
+  echo "published the figures and tables into $target"
+}
+
 study_finish() {
   case "$study_mode" in
     list) exit 0 ;;
@@ -249,7 +273,8 @@ study_finish() {
         printf '# each batch waits for its field). Rerun the --slurm command after a partial run: the new\n'
         printf '# scripts list only the runs that are not complete.\nset -u\n'
         local line; for line in "${study_submit_lines[@]}"; do printf '%s\n' "$line"; done
-        printf 'echo "after the jobs: %s (same options, without --slurm) does the analysis; --status shows progress"\n' "$study_name"
+        printf 'echo "after the jobs: %s (same options, without --slurm) does the analysis;' "$study_name"
+        printf ' --status shows progress"\n'
       } > "$submit"
       chmod +x "$submit"
       echo "wrote $submit (${#study_submit_lines[@]} submissions); submit with: bash $submit"
@@ -260,6 +285,7 @@ study_finish() {
       exit "$study_status_all" ;;
   esac
   study_costs
+  (( study_publish )) && study_publish_results
   if [ -f "$study_times" ]; then
     echo "== batch wall times ($study_times)"
     column -t -s $'\t' "$study_times" 2>/dev/null || cat "$study_times"

@@ -282,11 +282,13 @@ def test_study_slurm_scripts_and_forced_field_dependency(spaced_tmp):
         ("grid96", "grid192"), ("base", "grid192"), ("grid192", "grid192")]
 
 
-def test_study_runs_resumes_and_records_costs(spaced_tmp, agglo):
+def test_study_runs_resumes_and_records_costs(spaced_tmp, agglo, monkeypatch):
     out = spaced_tmp / "q"
+    published = spaced_tmp / "published"
+    monkeypatch.setenv("AGGLO_STUDY_PUBLISH_DIR", str(published))
     command = [REPO / "tools" / "quiescent-resolved-study.sh", "-o", out, "--only", "^needle-none$",
                "--cheap-runs", "2", "-j", "2"]
-    first = run_tool(command, cwd=REPO)
+    first = run_tool(command + ["--publish"], cwd=REPO)
     assert first.returncode == 0, first.stderr + first.stdout
     second = run_tool(command, cwd=REPO)
     assert second.returncode == 0, second.stderr + second.stdout
@@ -297,3 +299,8 @@ def test_study_runs_resumes_and_records_costs(spaced_tmp, agglo):
     status = run_tool(command + ["--status"], cwd=REPO)
     assert status.returncode == 0 and "2 complete" in status.stdout
     assert (out / "stats-all" / "rates.csv").exists()
+    # --publish: the tables without the output root in their paths, no runs.csv.
+    costs_published = (published / "batch_costs.tsv").read_text()
+    assert "needle-none\t2\t" in costs_published and str(out) not in costs_published
+    assert (published / "stats-all_rates.csv").exists()
+    assert not list(published.glob("*runs.csv"))
