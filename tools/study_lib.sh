@@ -32,7 +32,10 @@ Common options:
                            in order (the batches depend on their forced field); run nothing
       --sbatch-option O    extra "#SBATCH O" line in every script (repeatable), e.g. --partition=short
       --keep-checkpoints   keep each complete run's checkpoints (default: deleted after the batch,
-                           they are only needed to restart an interrupted run: about 100 MB at 128^3)
+                           they are only needed to restart an interrupted run: 118 MB at 128^3)
+      --keep-fields        keep each complete run's field snapshots and final field (default:
+                           deleted after the batch; the analysis reads summary.json and
+                           particles.h5 only; 3 x 67 MB per resolved run at 128^3)
       --no-analysis        skip the statistics and figures at the end
       --publish            after the analysis, copy its figures (PNG) and small tables (rates,
                            means, illustrative runs, comparisons, costs; not runs.csv) into
@@ -51,7 +54,7 @@ EOF
 
 study_parse_arguments() {
   study_out="output/$study_name" study_seed=1001 study_jobs=1 study_jobs_given=0 study_ranks=2
-  study_launcher='' study_time='' study_only='' study_mode=run study_keep_checkpoints=0
+  study_launcher='' study_time='' study_only='' study_mode=run study_keep_checkpoints=0 study_keep_fields=0
   study_analysis=1 study_publish=0
   study_sbatch_options=()
   study_extra_arguments=()
@@ -69,6 +72,7 @@ study_parse_arguments() {
       --slurm) study_mode=slurm; shift ;;
       --sbatch-option) study_sbatch_options+=("${2:?--sbatch-option needs a value}"); shift 2 ;;
       --keep-checkpoints) study_keep_checkpoints=1; shift ;;
+      --keep-fields) study_keep_fields=1; shift ;;
       --no-analysis) study_analysis=0; shift ;;
       --publish) study_publish=1; shift ;;
       -h|--help) study_usage_specific; echo; study_usage_common; exit 0 ;;
@@ -222,14 +226,18 @@ study_batch() {
   end=$(date +%s.%N)
   study_time_row "$root" "$runs" "$study_jobs" $((runs - before)) "$(echo "$end - $start" | bc)" "$status"
   [ "$status" -eq 0 ] || { echo "$study_name: batch $root exit status $status" >&2; study_status_all=1; }
-  (( study_keep_checkpoints )) || study_prune_checkpoints "$root"
+  study_prune "$root"
 }
 
-# Checkpoints of complete runs are only needed to restart them, and a complete run is never restarted.
-study_prune_checkpoints() {
+# study_prune ROOT: the bulky files of the complete runs of a batch. Checkpoints are only needed to
+# restart a run, and a complete run is never restarted; the analysis reads summary.json and
+# particles.h5, not the field snapshots (fields_<step>.h5, fields.xdmf) or the final field.
+study_prune() {
   local run
   for run in "$1"/run_*/; do
-    [ -f "$run/summary.json" ] && [ ! -e "$run/FAILED" ] && rm -f "$run"/checkpoints/checkpoint_*.h5
+    [ -f "$run/summary.json" ] && [ ! -e "$run/FAILED" ] || continue
+    (( study_keep_checkpoints )) || rm -f "$run"/checkpoints/checkpoint_*.h5
+    (( study_keep_fields )) || rm -f "$run"/fields_*.h5 "$run"/fields.xdmf "$run"/final_field.h5
   done
   return 0
 }

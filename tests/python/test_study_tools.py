@@ -292,6 +292,10 @@ def test_study_runs_resumes_and_records_costs(spaced_tmp, agglo, monkeypatch):
     assert first.returncode == 0, first.stderr + first.stdout
     second = run_tool(command, cwd=REPO)
     assert second.returncode == 0, second.stderr + second.stdout
+    # The end checkpoint every pair-scene run writes is pruned from complete runs; the analysis'
+    # inputs stay.
+    assert not list(out.glob("needle-none/run_*/checkpoints/checkpoint_*.h5"))
+    assert len(list(out.glob("needle-none/run_*/particles.h5"))) == 2
     times = read_csv(out / "batch_times.tsv", "\t")
     assert [row["runs_run_by_this_call"] for row in times] == ["2", "0"]
     costs = read_csv(out / "batch_costs.tsv", "\t")
