@@ -160,7 +160,8 @@ def history_metrics(run):
         v1 = np.asarray(h5["particle1/velocity"][:], float)
         v2 = np.asarray(h5["particle2/velocity"][:], float)
         chi = np.asarray(h5["pair/chi_eta"][:], float) if "pair/chi_eta" in h5 else None
-        points = [np.asarray(h5[f"pair/closest_point{k}"][:], float) for k in (1, 2)]
+        points = ([np.asarray(h5[f"pair/closest_point{k}"][:], float) for k in (1, 2)]
+                  if "pair/closest_point1" in h5 and "pair/closest_point2" in h5 else None)
         centres = [np.asarray(h5[f"particle{k}/position"][:], float) for k in (1, 2)]
         events = np.asarray(h5["events/time"][:], float) if "events/time" in h5 else np.empty(0)
         # /radius is a dataset in the code's files; an attribute in older or hand-made ones.
@@ -174,7 +175,7 @@ def history_metrics(run):
     first = run.summary["first_collision"]
     if first is not None and chi is not None and chi.size:
         values["chi_eta_first_collision"] = float(chi[np.argmin(np.abs(time - first["time"]))])
-    if first is not None and radius is not None:
+    if first is not None and radius is not None and points is not None:
         values["lever_arm_first_collision"] = lever_arm(time, first["time"], points, centres, radius)
     values["contact_episodes"] = contact_episodes(events, time, gap, EPISODE_FLOORS * run.detection_floor)
     def path(speed):                      # trapezoidal integral of a speed over the rows
