@@ -64,10 +64,23 @@ class Run:
         self.batch = batch
         self.summary = summary
         self.group = ""
+        self._metrics = None
 
     @property
     def label(self):
         return f"{os.path.basename(self.batch)}/{os.path.basename(self.directory)}"
+
+    def metrics(self):
+        """Quantities of the run's particles.h5 (HISTORY_METRICS; None each without the file),
+        read once: max_particle_speed (m/s, largest |v| of either particle over the rows),
+        chi_eta_first_collision (the row nearest the first collision), contact_episodes (see
+        contact_episodes), carried_distance (m, path of the pair's midpoint, the integral of
+        |v1 + v2| / 2 dt), close_fraction (share of the run time after the first collision with
+        the gap below CLOSE_GAP_RADII radii; 0 without contact), relative_path (m, the integral
+        of |v2 - v1| dt: how far the particles moved relative to each other), radius (m)."""
+        if self._metrics is None:
+            self._metrics = history_metrics(self)
+        return self._metrics
 
     @property
     def detection_floor(self):
@@ -87,6 +100,95 @@ def is_fluid_run(directory):
     def has(name):
         return os.path.exists(os.path.join(directory, name))
     return any(has(m) for m in FLUID_MARKERS) and not (has("summary.json") or has("particles.h5"))
+
+
+HISTORY_METRICS = ("max_particle_speed", "chi_eta_first_collision", "lever_arm_first_collision",
+                   "contact_episodes", "carried_distance", "relative_path", "close_fraction", "radius")
+# Between two collisions of one contact episode the gap stays below this many detection floors; a
+# pair whose gap rises above it between two collisions has separated and come back (a new episode).
+EPISODE_FLOORS = 10.0
+# "Close" for the carried-together rule: a gap below this share of the volume-equivalent radius
+# (5 um for the paper's 50 um particles: 2.5 times the chaotic protocol's initial gap).
+CLOSE_GAP_RADII = 0.1
+
+
+def contact_episodes(event_times, time, gap, threshold):
+    """Number of contact episodes: collisions grouped so that two successive collisions belong to
+    the same episode unless some sampled gap between them exceeds threshold. Sampled rows only:
+    a separation shorter than the row interval is not seen."""
+    import numpy as np
+    events = np.sort(np.asarray(event_times, float))
+    if events.size == 0:
+        return 0
+    above = np.asarray(time, float)[np.asarray(gap, float) > threshold]
+    if above.size == 0 or events.size == 1:
+        return 1
+    index = np.searchsorted(above, events[:-1], side="right")
+    separated = (index < above.size) & (above[np.minimum(index, above.size - 1)] < events[1:])
+    return 1 + int(np.count_nonzero(separated))
+
+
+def lever_arm(time, contact_time, points, centres, radius):
+    """Mean over both particles of |(c_k - x_k) x n| / r at the last row before contact_time:
+    the lever arm of the contact about each centre (c_k closest point, x_k centre, n the unit
+    vector from c_1 to c_2, r the radius). 0 for a central contact, where the whole normal
+    rebound goes into the centres' motion; large when the contact is far off the centre line and
+    the rebound turns the bodies (1/m_eff = 1/m + (r x n)^2 / I). Positions are differences
+    within one body, so the periodic wrap of the centres does not enter; None when undefined."""
+    import numpy as np
+    row = max(0, int(np.searchsorted(time, contact_time)) - 1)
+    normal = points[1][row] - points[0][row]
+    length = np.linalg.norm(normal)
+    if not length > 0.0:
+        return None
+    normal = normal / length
+    arms = [np.linalg.norm(np.cross(points[k][row] - centres[k][row], normal)) / radius for k in (0, 1)]
+    return float(0.5 * (arms[0] + arms[1]))
+
+
+def history_metrics(run):
+    """The HISTORY_METRICS of one run from its particles.h5 (every value None without the file)."""
+    import numpy as np
+    values = dict.fromkeys(HISTORY_METRICS)
+    path = os.path.join(run.directory, "particles.h5")
+    if not os.path.exists(path):
+        return values
+    import h5py
+    with h5py.File(path, "r") as h5:
+        time = np.asarray(h5["time"][:], float)
+        gap = np.asarray(h5["pair/gap"][:], float)
+        v1 = np.asarray(h5["particle1/velocity"][:], float)
+        v2 = np.asarray(h5["particle2/velocity"][:], float)
+        chi = np.asarray(h5["pair/chi_eta"][:], float) if "pair/chi_eta" in h5 else None
+        points = ([np.asarray(h5[f"pair/closest_point{k}"][:], float) for k in (1, 2)]
+                  if "pair/closest_point1" in h5 and "pair/closest_point2" in h5 else None)
+        centres = [np.asarray(h5[f"particle{k}/position"][:], float) for k in (1, 2)]
+        events = np.asarray(h5["events/time"][:], float) if "events/time" in h5 else np.empty(0)
+        # /radius is a dataset in the code's files; an attribute in older or hand-made ones.
+        radius = h5["radius"][()] if "radius" in h5 else h5.attrs.get("radius")
+        radius = None if radius is None else float(np.asarray(radius))
+    if time.size == 0:
+        return values
+    speeds = np.concatenate([np.linalg.norm(v1, axis=1), np.linalg.norm(v2, axis=1)])
+    values["max_particle_speed"] = float(np.max(speeds))
+    values["radius"] = radius
+    first = run.summary["first_collision"]
+    if first is not None and chi is not None and chi.size:
+        values["chi_eta_first_collision"] = float(chi[np.argmin(np.abs(time - first["time"]))])
+    if first is not None and radius is not None and points is not None:
+        values["lever_arm_first_collision"] = lever_arm(time, first["time"], points, centres, radius)
+    values["contact_episodes"] = contact_episodes(events, time, gap, EPISODE_FLOORS * run.detection_floor)
+    def path(speed):                      # trapezoidal integral of a speed over the rows
+        return float(np.sum(0.5 * (speed[1:] + speed[:-1]) * np.diff(time)))
+    values["carried_distance"] = path(np.linalg.norm(0.5 * (v1 + v2), axis=1))
+    values["relative_path"] = path(np.linalg.norm(v2 - v1, axis=1))
+    values["close_fraction"] = 0.0
+    if first is not None and radius is not None and time[-1] > first["time"]:
+        after = time >= first["time"]
+        dt = np.gradient(time[after]) if np.count_nonzero(after) > 1 else np.zeros(1)
+        close = gap[after] < CLOSE_GAP_RADII * radius
+        values["close_fraction"] = float(np.sum(dt[close]) / np.sum(dt)) if np.sum(dt) > 0 else 0.0
+    return values
 
 
 def _check_summary(summary):
@@ -202,7 +304,9 @@ def rate_table(runs, groups):
 RUN_COLUMNS = ("batch", "run", "group", "name", "seed", "shape", "aspect_ratio", "fluid", "outcome",
                "collisions", "first_collision_time", "theta1", "phi1", "theta2", "phi2", "psi",
                "normal_velocity_before", "normal_velocity_after", "max_vdw_force", "final_gap",
-               "final_relative_velocity", "psi_final", "end_time", "steps", "wall_time")
+               "final_relative_velocity", "psi_final", "end_time", "steps", "wall_time",
+               "max_particle_speed", "chi_eta_first_collision", "lever_arm_first_collision",
+               "contact_episodes", "carried_distance", "relative_path", "close_fraction")
 
 
 def run_row(run):
@@ -217,6 +321,9 @@ def run_row(run):
     row["first_collision_time"] = first.get("time", "")
     for key in FIRST_COLLISION_KEYS[1:]:
         row[key] = first.get(key, "")
+    metrics = run.metrics()
+    for key in HISTORY_METRICS[:-1]:
+        row[key] = "" if metrics[key] is None else metrics[key]
     return row
 
 
@@ -394,7 +501,8 @@ def make_figures(runs, groups, directory, history_runs, notes=None):
             continue
         overlap = np.mean(gaps[group] <= 0.0) * 100.0
         n = _pdf_line(axis, gaps[group][gaps[group] > 0.0], bins,
-                      f"{group}, overlap {overlap:.1f}% of samples", log_bins=True, color=colours[group])
+                      f"{group}, mean {np.mean(gaps[group]):.3g} m, overlap {overlap:.1f}% of samples",
+                      log_bins=True, color=colours[group])
         few.count(axis, "separation_pdf", "", group, n)
     floor_notes = []
     if bins is not None:
@@ -415,7 +523,9 @@ def make_figures(runs, groups, directory, history_runs, notes=None):
     if every.size:
         bins = np.linspace(every.min(), every.max() if every.max() > every.min() else every.min() + 1, 61)
         for group in groups:
-            n = _pdf_line(axis, velocities[group] * 1.0e3, bins, group, color=colours[group])
+            mean = np.mean(velocities[group]) * 1.0e3 if velocities[group].size else float("nan")
+            n = _pdf_line(axis, velocities[group] * 1.0e3, bins, f"{group}, mean {mean:.3g} mm/s",
+                          color=colours[group])
             few.count(axis, "relative_velocity_pdf", "", group, n)
     axis.set_yscale("log")
     axis.set_xlabel("normal relative velocity of the closest points (mm/s, > 0 approaching)")
@@ -445,6 +555,26 @@ def make_figures(runs, groups, directory, history_runs, notes=None):
     label_log_ends(axis, "x")
     few.annotate()
     written += _save(figure, directory, "max_vdw_force_pdf")
+    plt.close(figure)
+
+    # 3b. PDF of each run's maximum particle speed (how strongly the flow accelerates each shape).
+    speeds = {g: np.array([r.metrics()["max_particle_speed"] for r in runs if r.group == g
+                           and r.metrics()["max_particle_speed"] is not None], float) * 1.0e3
+              for g in groups}
+    figure, axis = plt.subplots(figsize=(6, 4))
+    every = np.concatenate(list(speeds.values())) if speeds else np.empty(0)
+    if every.size:
+        bins = np.linspace(0.0, every.max() * 1.05 if every.max() > 0 else 1.0, 21)
+        for group in groups:
+            label = f"{group}, mean {np.mean(speeds[group]):.3g} mm/s" if speeds[group].size else group
+            n = _pdf_line(axis, speeds[group], bins, label, color=colours[group])
+            few.count(axis, "max_particle_speed_pdf", "", group, n)
+    axis.set_xlabel("maximum particle speed of a run, either particle (mm/s)")
+    axis.set_ylabel("PDF (s/mm)")
+    axis.set_title("Maximum particle speed")
+    _legend_or_note(axis, "no particles.h5 histories")
+    few.annotate()
+    written += _save(figure, directory, "max_particle_speed_pdf")
     plt.close(figure)
 
     # 4. PDFs of psi at the first collision, agglomerated vs rebounded, one panel per group.
@@ -524,6 +654,152 @@ def make_figures(runs, groups, directory, history_runs, notes=None):
     return written
 
 
+MEAN_COLUMNS = ("group", "runs", "samples", "mean_gap", "mean_relative_velocity",
+                "mean_abs_relative_velocity", "mean_max_particle_speed", "median_max_particle_speed")
+
+
+def history_means(runs, groups):
+    """Rows of history_means.csv: per group the means over every history row of its runs (the
+    samples the separation and relative-velocity PDFs are drawn from; SI units) and the mean and
+    median of the runs' maximum particle speed."""
+    import numpy as np
+    rows = []
+    for group in groups:
+        members = [r for r in runs if r.group == group]
+        histories = [h for h in (_histories(r) for r in members) if h is not None]
+        gaps = np.concatenate([h[1] for h in histories]) if histories else np.empty(0)
+        velocities = np.concatenate([h[2] for h in histories]) if histories else np.empty(0)
+        speeds = np.array([r.metrics()["max_particle_speed"] for r in members
+                           if r.metrics()["max_particle_speed"] is not None], float)
+
+        def mean(values):
+            return float(np.mean(values)) if values.size else ""
+        rows.append({"group": group, "runs": len(members), "samples": int(gaps.size),
+                     "mean_gap": mean(gaps), "mean_relative_velocity": mean(velocities),
+                     "mean_abs_relative_velocity": mean(np.abs(velocities)),
+                     "mean_max_particle_speed": mean(speeds),
+                     "median_max_particle_speed": float(np.median(speeds)) if speeds.size else ""})
+    return rows
+
+
+# Rules that pick the illustrative runs of a group (docs/tools.md, "Illustrative runs"):
+# name, what it shows, and whether a run qualifies / its score (larger is better).
+EDGE_TOLERANCE = 0.15          # rad: a contact point this close to the rim (disk) or tip (needle)
+
+
+def _edge_distance(shape, phi):
+    """Distance (rad) of the parametric angle phi from the shape's edge: the rim of a disk
+    (|phi| = pi/2, the equator of the oblate spheroid), the tips of a needle (phi = 0, +-pi);
+    None for a sphere (no edge)."""
+    if shape == "disk":
+        return abs(abs(phi) - 0.5 * math.pi)
+    if shape == "needle":
+        return min(abs(phi), math.pi - abs(phi))
+    return None
+
+
+def _successive_collisions(run):
+    """Agglomerated after at least two contact episodes; score: the episodes."""
+    episodes = run.metrics()["contact_episodes"]
+    if run.summary["outcome"] != "agglomerated" or episodes is None or episodes < 2:
+        return None
+    return float(episodes)
+
+
+# The carried-together rule: the pair's midpoint travels at least this many radii (10 um for the
+# paper's particles, about the path of the flow at u_rms over 1.3 ms), and farther than the
+# particles move relative to each other: the pair moves as one, with the flow.
+CARRIED_RADII = 0.2
+
+
+def _carried_together(run):
+    """Collided, not agglomerated, carried (midpoint path >= CARRIED_RADII radii and >= the
+    relative path) and close after the first collision; score: the share of the time after it
+    with the gap below CLOSE_GAP_RADII radii."""
+    metrics = run.metrics()
+    if run.summary["outcome"] == "agglomerated" or run.summary["first_collision"] is None:
+        return None
+    if metrics["radius"] is None or metrics["carried_distance"] is None:
+        return None
+    if (metrics["carried_distance"] < CARRIED_RADII * metrics["radius"]
+            or metrics["carried_distance"] < metrics["relative_path"]):
+        return None
+    return metrics["close_fraction"] or None
+
+
+def _edge_on_bounce(run):
+    """Rebounded with one contact episode, the first contact within EDGE_TOLERANCE of the edge of
+    at least one particle; score: minus that distance (the nearest the edge wins)."""
+    first = run.summary["first_collision"]
+    if run.summary["outcome"] != "rebounded" or first is None or run.metrics()["contact_episodes"] != 1:
+        return None
+    distances = [_edge_distance(run.summary["shape"], first[k]) for k in ("phi1", "phi2")]
+    distances = [d for d in distances if d is not None]
+    if not distances or min(distances) > EDGE_TOLERANCE:
+        return None
+    return -min(distances)
+
+
+ILLUSTRATION_RULES = (
+    ("successive_collisions", "agglomerated by successive collisions", _successive_collisions),
+    ("carried_together", "stays close, carried by the same eddy", _carried_together),
+    ("edge_on_bounce", "edge-on bounce", _edge_on_bounce))
+ILLUSTRATION_COLUMNS = ("group", "rule", "run", "batch", "seed", "outcome", "collisions",
+                        "contact_episodes", "score", "candidates")
+
+
+def choose_illustrative_runs(runs, groups):
+    """Per group and rule the best-scoring run (ties: the lowest seed), as rows of
+    illustrative.csv (run empty when no run of the group qualifies) and the chosen runs."""
+    rows, chosen = [], []
+    for group in groups:
+        members = sorted((r for r in runs if r.group == group), key=lambda r: r.summary["seed"])
+        for rule, _description, score_of in ILLUSTRATION_RULES:
+            scored = [(score_of(r), r) for r in members]
+            scored = [(score, r) for score, r in scored if score is not None]
+            row = dict.fromkeys(ILLUSTRATION_COLUMNS, "")
+            row.update(group=group, rule=rule, candidates=len(scored))
+            if scored:
+                best = max(score for score, _ in scored)
+                run = next(r for score, r in scored if score == best)
+                row.update(run=os.path.basename(run.directory), batch=run.batch, seed=run.summary["seed"],
+                           outcome=run.summary["outcome"], collisions=run.summary["collisions"],
+                           contact_episodes=run.metrics()["contact_episodes"], score=best)
+                chosen.append((rule, run))
+            rows.append(row)
+    return rows, chosen
+
+
+def illustrative_figure(chosen, directory):
+    """Gap (symmetric log) and normal relative velocity against time of the illustrative runs,
+    one column per rule; returns the files written."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    figure, axes = plt.subplots(2, len(ILLUSTRATION_RULES), figsize=(4.2 * len(ILLUSTRATION_RULES), 6),
+                                sharex="col", squeeze=False)
+    for column, (rule, description, _score) in enumerate(ILLUSTRATION_RULES):
+        top, bottom = axes[0][column], axes[1][column]
+        for k, run in enumerate(r for name, r in chosen if name == rule):
+            history = _histories(run)
+            if history is None:
+                continue
+            time, gap, velocity = history
+            label = f"{run.label} ({run.group}, {run.summary['outcome']})"
+            top.plot(time * 1e3, gap, color=f"C{k % 10}", label=label)
+            bottom.plot(time * 1e3, velocity * 1e3, color=f"C{k % 10}")
+        top.set_yscale("symlog", linthresh=1.0e-9)
+        top.set_title(description, fontsize=9)
+        _legend_or_note(top, "no run qualifies")
+        bottom.set_xlabel("time (ms)")
+    axes[0][0].set_ylabel("surface separation h (m)")
+    axes[1][0].set_ylabel("normal relative velocity (mm/s)")
+    figure.tight_layout()
+    paths = _save(figure, directory, "illustrative_histories")
+    plt.close(figure)
+    return paths
+
+
 def choose_history_runs(runs, groups, requested):
     """The runs named by --history (run directories or names), else per group the first
     agglomerated and the first rebounded run (the first run when the group has neither)."""
@@ -557,6 +833,18 @@ def print_rates(rows, stream):
                      f"[{row['wilson_low']:.3f}, {row['wilson_high']:.3f}]\n")
 
 
+def print_means(rows, stream):
+    width = max(12, max(len(row["group"]) for row in rows))
+    stream.write(f"{'group':<{width}} {'mean gap (m)':>13} {'mean v_rel (mm/s)':>18} "
+                 f"{'mean max speed (mm/s)':>22}\n")
+    for row in rows:
+        def show(value, scale=1.0, form=".4g"):
+            return "-" if value == "" else format(value * scale, form)
+        stream.write(f"{row['group']:<{width}} {show(row['mean_gap']):>13} "
+                     f"{show(row['mean_relative_velocity'], 1e3):>18} "
+                     f"{show(row['mean_max_particle_speed'], 1e3):>22}\n")
+
+
 def parse_arguments(argv):
     parser = argparse.ArgumentParser(
         prog="agglo-stats",
@@ -576,6 +864,10 @@ def parse_arguments(argv):
     parser.add_argument("--history", action="append", metavar="RUN", default=[],
                         help="run (directory, or name like run_0007) whose time history is drawn; "
                              "repeatable (default: first agglomerated and rebounded run per group)")
+    parser.add_argument("--illustrate", action="store_true",
+                        help="pick illustrative runs per group by rule (agglomerated by successive "
+                             "collisions, carried together by the flow, edge-on bounce): "
+                             "illustrative.csv and the figure illustrative_histories")
     parser.add_argument("--no-figures", action="store_true", help="only the table and CSV files")
     return parser.parse_args(argv)
 
@@ -598,6 +890,18 @@ def main(argv=None):
         write_csv(os.path.join(out, "runs.csv"), RUN_COLUMNS, [run_row(run) for run in runs])
         write_csv(os.path.join(out, "rates.csv"), tuple(rows[0].keys()), rows)
         print(f"wrote {os.path.join(out, 'runs.csv')} ({len(runs)} runs) and {os.path.join(out, 'rates.csv')}")
+        means = history_means(runs, groups)
+        write_csv(os.path.join(out, "history_means.csv"), MEAN_COLUMNS, means)
+        print_means(means, sys.stdout)
+        if arguments.illustrate:
+            rows, chosen = choose_illustrative_runs(runs, groups)
+            write_csv(os.path.join(out, "illustrative.csv"), ILLUSTRATION_COLUMNS, rows)
+            for row in rows:
+                print(f"illustrative {row['group']} {row['rule']}: "
+                      + (f"{row['run']} (seed {row['seed']}, score {row['score']:.4g}, "
+                         f"{row['candidates']} candidates)" if row["run"] else "no run qualifies"))
+            if not arguments.no_figures:
+                illustrative_figure(chosen, out)
         if not arguments.no_figures:
             history_runs = choose_history_runs(runs, groups, arguments.history)
             notes = []

@@ -1,0 +1,310 @@
+"""The study tools on synthetic batches of the FAKE pair-scene fixture (fake_pair_scene.py), whose
+histories and outcomes the tests set: contact episodes, the history metrics of runs.csv, the
+means, the illustrative-run rules (agglo-stats --illustrate), the paired comparison
+(study_compare.py), the speed-accuracy analysis (speed_accuracy.py) and the batch costs
+(batch_costs.py). The study scripts themselves are checked on the real decks through --list and
+--slurm (the code merges their decks), and one tiny real batch of $AGGLO end to end."""
+import csv
+import json
+import math
+import os
+
+import h5py
+import numpy as np
+import pytest
+
+from agglo_stats import contact_episodes, lever_arm
+from conftest import AGGLO_STATS, REPO, run_tool
+from fake_pair_scene import write_run
+from speed_accuracy import pareto_front
+
+PYTHON = REPO / ".venv" / "bin" / "python"
+
+
+def read_csv(path, delimiter=","):
+    with open(path, newline="") as handle:
+        return list(csv.DictReader(handle, delimiter=delimiter))
+
+
+def edit_summary(directory, **first_collision):
+    path = os.path.join(directory, "summary.json")
+    with open(path) as handle:
+        summary = json.load(handle)
+    summary["first_collision"].update(first_collision)
+    with open(path, "w") as handle:
+        json.dump(summary, handle)
+    return summary
+
+
+# ---------------------------------------------------------------------------------------------
+# Contact episodes
+# ---------------------------------------------------------------------------------------------
+
+def test_contact_episodes_counts_separations_between_collisions():
+    time = np.linspace(0.0, 10.0, 101)
+    gap = np.full(101, 1.0e-9)
+    gap[(time > 3.0) & (time < 4.0)] = 50.0e-9          # one separation between t = 3 and 4
+    events = [1.0, 2.0, 2.5, 5.0, 6.0]                    # 3 before it, 2 after: two episodes
+    assert contact_episodes(events, time, gap, 10.0e-9) == 2
+    gap[(time > 5.4) & (time < 5.6)] = 20.0e-9            # a second separation: three
+    assert contact_episodes(events, time, gap, 10.0e-9) == 3
+    assert contact_episodes([], time, gap, 10.0e-9) == 0
+    assert contact_episodes([4.0], time, gap, 10.0e-9) == 1
+
+
+def test_lever_arm_of_a_contact():
+    """Two unit spheres touching off their centre line: the contact normal along x, the contact
+    point 0.6 off the line through each centre along y: lever arm 0.6 r; a central contact 0."""
+    r = 2.0
+    time = np.array([0.0, 1.0, 2.0])
+    centres = [np.tile([0.0, 0.0, 0.0], (3, 1)), np.tile([2.0 * 0.8 * r, 0.0, 0.0], (3, 1))]
+    point = np.array([0.8 * r, 0.6 * r, 0.0])
+    points = [np.tile(point, (3, 1)), np.tile(point + [1.0e-9, 0.0, 0.0], (3, 1))]
+    assert lever_arm(time, 1.5, points, centres, r) == pytest.approx(0.6, rel=1e-9)
+    points = [np.tile([r, 0.0, 0.0], (3, 1)), np.tile([r + 1.0e-9, 0.0, 0.0], (3, 1))]
+    assert lever_arm(time, 1.5, points, centres, r) == pytest.approx(0.0, abs=1e-12)
+    assert lever_arm(time, 1.5, [points[0], points[0]], centres, r) is None
+
+
+# ---------------------------------------------------------------------------------------------
+# agglo-stats: history metrics, means, illustrative runs
+# ---------------------------------------------------------------------------------------------
+
+def make_illustration_batch(root):
+    """Disk runs: 1-2 plain agglomerated, 3 agglomerated after a separation (two episodes),
+    4-5 rebounded with contacts away from the rim, 6 rebounded at 0.05 rad from the rim, 7
+    rebounded and carried 100 um by a common drift of both particles."""
+    directories = {}
+    plan = ["agglomerated", "agglomerated", "agglomerated", "rebounded", "rebounded", "rebounded",
+            "rebounded"]
+    for seed, outcome in enumerate(plan, start=1):
+        directory = os.path.join(root, f"run_{seed:04d}")
+        write_run(directory, seed=seed, shape="disk", outcome=outcome, rows=200)
+        directories[seed] = directory
+        if outcome == "rebounded":
+            edit_summary(directory, phi1=0.5, phi2=-0.4)
+    with h5py.File(os.path.join(directories[3], "particles.h5"), "r+") as h5:
+        time = h5["time"][:]
+        contact = h5["events/time"][0]
+        gap = h5["pair/gap"][:]
+        late = time > contact + 0.2 * (time[-1] - contact)
+        window = late & (time < contact + 0.3 * (time[-1] - contact))
+        gap[window] = 60.0e-9                               # separated by 60 nm, then back
+        h5["pair/gap"][...] = gap
+        del h5["events/time"]
+        h5["events/time"] = np.array([contact, contact + 0.5 * (time[-1] - contact)])
+    edit_summary(directories[6], phi1=0.5 * math.pi + 0.05)
+    with h5py.File(os.path.join(directories[7], "particles.h5"), "r+") as h5:
+        for k in (1, 2):
+            velocity = h5[f"particle{k}/velocity"][:]
+            velocity[:, 1] += 1.0e-2                       # 10 mm/s for 10 ms: 100 um
+            h5[f"particle{k}/velocity"][...] = velocity
+    return directories
+
+
+def test_history_metrics_means_and_illustrative_runs(spaced_tmp):
+    root = spaced_tmp / "disks"
+    make_illustration_batch(str(root))
+    out = spaced_tmp / "stats"
+    result = run_tool([AGGLO_STATS, root, "-o", out, "--illustrate"])
+    assert result.returncode == 0, result.stderr
+    runs = {row["run"]: row for row in read_csv(out / "runs.csv")}
+    # Max particle speed: each fake particle moves at half the relative velocity (fixture).
+    for name, row in runs.items():
+        with h5py.File(root / name / "particles.h5", "r") as h5:
+            speeds = np.linalg.norm(np.concatenate([h5["particle1/velocity"][:],
+                                                    h5["particle2/velocity"][:]]), axis=1)
+        assert float(row["max_particle_speed"]) == pytest.approx(speeds.max(), rel=1e-12)
+    # The fixture's approach: 5 um closed by the contact at 5 ms (half its 10 ms), 1 mm/s.
+    assert float(runs["run_0001"]["max_particle_speed"]) == pytest.approx(0.5 * 1.0e-3, rel=1e-9)
+    assert runs["run_0003"]["contact_episodes"] == "2"
+    assert runs["run_0001"]["contact_episodes"] == "1"
+    assert float(runs["run_0007"]["carried_distance"]) == pytest.approx(1.0e-4, rel=1e-6)
+    # Relative path: 5 um of approach, then the rebound at 0.4 mm/s for the remaining 5 ms.
+    assert float(runs["run_0007"]["relative_path"]) == pytest.approx(5.0e-6 + 0.4e-3 * 5.0e-3, rel=0.02)
+    # Means over every history row of the group.
+    means = read_csv(out / "history_means.csv")[0]
+    gaps = []
+    for name in runs:
+        with h5py.File(root / name / "particles.h5", "r") as h5:
+            gaps.append(h5["pair/gap"][:])
+    assert float(means["mean_gap"]) == pytest.approx(np.mean(np.concatenate(gaps)), rel=1e-12)
+    # The rules pick the runs built for them.
+    picks = {row["rule"]: row for row in read_csv(out / "illustrative.csv")}
+    assert picks["successive_collisions"]["run"] == "run_0003"
+    assert picks["edge_on_bounce"]["run"] == "run_0006"
+    assert picks["edge_on_bounce"]["candidates"] == "1"
+    assert picks["carried_together"]["run"] == "run_0007"
+    for stem in ("illustrative_histories", "max_particle_speed_pdf"):
+        assert (out / f"{stem}.png").stat().st_size > 1000
+
+
+def test_no_qualifying_run_is_said(spaced_tmp):
+    root = spaced_tmp / "spheres"
+    for seed in (1, 2):
+        write_run(str(root / f"run_{seed:04d}"), seed=seed, shape="sphere", outcome="rebounded", rows=40)
+    result = run_tool([AGGLO_STATS, root, "-o", spaced_tmp / "s", "--illustrate", "--no-figures"])
+    assert result.returncode == 0, result.stderr
+    assert "illustrative sphere edge_on_bounce: no run qualifies" in result.stdout
+    assert "illustrative sphere successive_collisions: no run qualifies" in result.stdout
+
+
+# ---------------------------------------------------------------------------------------------
+# Paired comparison and the speed-accuracy analysis
+# ---------------------------------------------------------------------------------------------
+
+def make_pair_of_batches(study, flips=(2, 5), speed_factor=1.1, runs=8):
+    """reference and variant batches of the same seeds; the variant flips the outcome of the
+    runs in flips and scales every first-collision normal velocity by speed_factor."""
+    for name in ("disk-base", "disk-cheap"):
+        for seed in range(1, runs + 1):
+            outcome = "agglomerated" if seed % 2 else "rebounded"
+            if name == "disk-cheap" and seed in flips:
+                outcome = "rebounded" if outcome == "agglomerated" else "agglomerated"
+            directory = os.path.join(study, name, f"run_{seed:04d}")
+            summary = write_run(directory, seed=seed, shape="disk", outcome=outcome, rows=40)
+            if name == "disk-cheap":
+                edit_summary(directory, normal_velocity_before=speed_factor
+                             * summary["first_collision"]["normal_velocity_before"])
+        with open(os.path.join(study, name, "batch.conf"), "w") as handle:
+            handle.write("base_seed=1\n")
+    with open(os.path.join(study, "manifest.tsv"), "w") as handle:
+        handle.write("knob\tvariant\tshape\tbatch\treference\n"
+                     "demo\tbase\tdisk\tdisk-base\tbase\n"
+                     "demo\tcheap\tdisk\tdisk-cheap\tbase\n"
+                     "demo\tmissing\tdisk\tdisk-missing\tbase\n")
+
+
+def test_study_compare_lists_every_paired_run(spaced_tmp):
+    make_pair_of_batches(str(spaced_tmp))
+    out = spaced_tmp / "transitions.csv"
+    result = run_tool([PYTHON, REPO / "tools" / "study_compare.py", spaced_tmp / "disk-base",
+                       spaced_tmp / "disk-cheap", "-o", out])
+    assert result.returncode == 0, result.stderr
+    rows = read_csv(out)
+    assert len(rows) == 8
+    assert sorted(int(row["seed"]) for row in rows if row["changed"] == "1") == [2, 5]
+    assert "8 paired runs, 2 changed outcome" in result.stdout
+
+
+def test_speed_accuracy_metrics_table_and_plots(spaced_tmp):
+    make_pair_of_batches(str(spaced_tmp))
+    out = spaced_tmp / "analysis"
+    result = run_tool([PYTHON, REPO / "tools" / "speed_accuracy.py", spaced_tmp / "manifest.tsv", "-o", out])
+    assert result.returncode == 0, result.stderr
+    rows = {row["variant"]: row for row in read_csv(out / "comparison.csv")}
+    cheap = rows["cheap"]
+    assert cheap["status"] == "compared"
+    assert int(cheap["paired_runs"]) == 8
+    assert float(cheap["outcome_agreement"]) == pytest.approx(6 / 8, rel=1e-12)
+    # Every run collided in both: the relative error of v_n is the factor's 0.1 on every run.
+    assert int(cheap["vn_runs"]) == 8
+    assert float(cheap["vn_error"]) == pytest.approx(0.1, rel=1e-9)
+    # Fake runs: wall 0.01 s over 10 ms simulated -> 1e-3 s per simulated ms.
+    assert float(cheap["cost_per_ms_s"]) == pytest.approx(1.0e-3, rel=1e-9)
+    assert float(cheap["cost_ratio"]) == pytest.approx(1.0, rel=1e-9)      # same fake cost
+    assert rows["base"]["status"] == "reference"
+    assert rows["missing"]["status"] == "not run"
+    table = (out / "speed_accuracy.md").read_text()
+    assert "| disk | cheap | base | 8 | 0.750 [" in table
+    for metric in ("outcome_disagreement", "vn_error", "chi_error", "vmax_error"):
+        assert (out / f"pareto_{metric}.png").stat().st_size > 1000
+
+
+def test_pareto_front_keeps_the_non_dominated_points():
+    points = [(1.0, 0.5), (2.0, 0.2), (3.0, 0.3), (4.0, 0.1), (0.5, 0.9), (2.0, 0.6)]
+    assert pareto_front(points) == [4, 0, 1, 3]
+
+
+def test_speed_accuracy_refuses_a_manifest_without_columns(spaced_tmp):
+    manifest = spaced_tmp / "manifest.tsv"
+    manifest.write_text("knob\tvariant\n grid\tbase\n")
+    result = run_tool([PYTHON, REPO / "tools" / "speed_accuracy.py", manifest])
+    assert result.returncode == 1
+    assert "lacks the column(s) shape, batch, reference" in result.stderr
+
+
+def test_batch_costs_sums_the_runs_wall_times(spaced_tmp):
+    make_pair_of_batches(str(spaced_tmp))
+    out = spaced_tmp / "costs.tsv"
+    result = run_tool([PYTHON, REPO / "tools" / "batch_costs.py", spaced_tmp, "-o", out])
+    assert result.returncode == 0, result.stderr
+    rows = {os.path.basename(row["batch"]): row for row in read_csv(out, "\t")}
+    assert sorted(rows) == ["disk-base", "disk-cheap"]
+    assert int(rows["disk-base"]["complete"]) == 8
+    assert float(rows["disk-base"]["wall_sum_s"]) == pytest.approx(0.08, abs=0.05)
+
+
+# ---------------------------------------------------------------------------------------------
+# The study scripts on the real decks
+# ---------------------------------------------------------------------------------------------
+
+def test_study_scripts_list_their_batches():
+    result = run_tool([REPO / "tools" / "quiescent-resolved-study.sh", "--list"], cwd=REPO)
+    assert result.returncode == 0, result.stderr
+    names = [line.split()[0] for line in result.stdout.splitlines() if not line.startswith("forced")]
+    assert names == ["needle-none", "needle-stokes-first_contact", "disk-none", "disk-stokes-first_contact",
+                     "needle-resolved-start", "needle-resolved-first_contact", "disk-resolved-start",
+                     "disk-resolved-first_contact"]
+    result = run_tool([REPO / "tools" / "chaotic-study.sh", "--list"], cwd=REPO)
+    assert result.returncode == 0, result.stderr
+    batches = [line.split()[:2] for line in result.stdout.splitlines() if not line.startswith("forced")]
+    assert batches == [[f"{shape}-{rung}", runs] for rung, runs in (("resolved", "60"), ("point", "120"))
+                       for shape in ("needle", "disk", "sphere")]
+    result = run_tool([REPO / "tools" / "speed-accuracy-study.sh", "--list", "--shapes", "disk",
+                       "--knobs", "diffusion substep"], cwd=REPO)
+    assert result.returncode == 0, result.stderr
+    assert "disk-cn5" in result.stdout and "run.dt=2.0e-05" in result.stdout
+    assert "scene.particle_substeps=100" in result.stdout
+    assert "disk-substep2e-6" in result.stdout and "scene.particle_substeps=2" in result.stdout
+
+
+def test_study_slurm_scripts_and_forced_field_dependency(spaced_tmp):
+    out = spaced_tmp / "sa"
+    result = run_tool([REPO / "tools" / "speed-accuracy-study.sh", "--slurm", "-o", out, "-N", "2",
+                       "--shapes", "disk", "--knobs", "grid", "--runs-256", "0",
+                       "--sbatch-option", "--partition=short"], cwd=REPO)
+    assert result.returncode == 0, result.stderr + result.stdout
+    submit = (out / "submit-all.sh").read_text()
+    assert run_tool(["bash", "-n", out / "submit-all.sh"]).returncode == 0
+    field = out / "slurm" / "forced_field_hit_box_96.sbatch"
+    text = field.read_text()
+    assert "#SBATCH --partition=short" in text and "grid.nx=96" in text
+    assert run_tool(["bash", "-n", field]).returncode == 0
+    # The 96^3 batch waits for its field; the batch script is montecarlo.sh's.
+    assert "field_96=$(sbatch --parsable" in submit
+    assert "--dependency=afterok:$field_96" in submit and "disk-grid96/montecarlo.sbatch" in submit
+    batch = (out / "disk-grid96" / "montecarlo.sbatch").read_text()
+    assert "#SBATCH --array=1-2" in batch and "#SBATCH --ntasks=2" in batch
+    assert "#SBATCH --partition=short" in batch
+    manifest = read_csv(out / "manifest.tsv", "\t")
+    assert [(row["variant"], row["reference"]) for row in manifest] == [
+        ("grid96", "grid192"), ("base", "grid192"), ("grid192", "grid192")]
+
+
+def test_study_runs_resumes_and_records_costs(spaced_tmp, agglo, monkeypatch):
+    out = spaced_tmp / "q"
+    published = spaced_tmp / "published"
+    monkeypatch.setenv("AGGLO_STUDY_PUBLISH_DIR", str(published))
+    command = [REPO / "tools" / "quiescent-resolved-study.sh", "-o", out, "--only", "^needle-none$",
+               "--cheap-runs", "2", "-j", "2"]
+    first = run_tool(command + ["--publish"], cwd=REPO)
+    assert first.returncode == 0, first.stderr + first.stdout
+    second = run_tool(command, cwd=REPO)
+    assert second.returncode == 0, second.stderr + second.stdout
+    # The end checkpoint every pair-scene run writes is pruned from complete runs; the analysis'
+    # inputs stay.
+    assert not list(out.glob("needle-none/run_*/checkpoints/checkpoint_*.h5"))
+    assert len(list(out.glob("needle-none/run_*/particles.h5"))) == 2
+    times = read_csv(out / "batch_times.tsv", "\t")
+    assert [row["runs_run_by_this_call"] for row in times] == ["2", "0"]
+    costs = read_csv(out / "batch_costs.tsv", "\t")
+    assert [(os.path.basename(row["batch"]), row["complete"]) for row in costs] == [("needle-none", "2")]
+    status = run_tool(command + ["--status"], cwd=REPO)
+    assert status.returncode == 0 and "2 complete" in status.stdout
+    assert (out / "stats-all" / "rates.csv").exists()
+    # --publish: the tables without the output root in their paths, no runs.csv.
+    costs_published = (published / "batch_costs.tsv").read_text()
+    assert "needle-none\t2\t" in costs_published and str(out) not in costs_published
+    assert (published / "stats-all_rates.csv").exists()
+    assert not list(published.glob("*runs.csv"))

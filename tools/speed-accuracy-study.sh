@@ -1,0 +1,150 @@
+#!/usr/bin/env bash
+# speed-accuracy-study.sh: the measured speed-accuracy trade (issue 12 section 3,
+# docs/speed-accuracy.md). `--help` says what it runs.
+set -u -o pipefail
+study_name=speed-accuracy-study
+
+study_usage_specific() {
+  cat <<'EOF'
+Usage: tools/speed-accuracy-study.sh [options]
+
+Each knob of the resolved pair scene varied alone on the chaotic protocol
+(input/chaotic_<shape>_resolved.nml, the 'base' setting: 128^3, analytic geometry, momentum
+loads, implicit coupling, explicit diffusion at 0.8 of its limit, particle step 2e-7 s), on the
+same N seeds per shape (S..S+N-1), against the knob's reference setting. Run from the repository
+root after `make build tools-deps`.
+
+  knob         variant      overrides (--set) on the base deck                            reference
+  grid         grid96       grid 96^3, dt 7.2e-6 s, 36 sub-steps, field hit_box_96       grid192
+               base         128^3, dt 4e-6 s, 20 sub-steps
+               grid192      grid 192^3, dt 1.8e-6 s, 9 sub-steps, field hit_box_192
+               grid256      grid 256^3, dt 1e-6 s, 5 sub-steps, field hit_box_256 (first N256 seeds)
+  geometry     mesh80/320/1280  &bodies geometry = 'mesh', mesh_level = 1/2/3              base
+  load_method  surface      &bodies load_method = 'surface' (mesh_level 2)                  base
+  coupling     explicit     &scene ibm_coupling = 'explicit'                                 base
+  diffusion    cn2/cn5/cn10 &fluid viscous_scheme = 'crank_nicolson', dt 2/5/10 x 4e-6 s,    base
+                            sub-steps 40/100/200 (particle step stays 2e-7 s)
+  substep      substep5e-7/1e-6/2e-6  particle_substeps 8/4/2 (particle step 5e-7..2e-6 s)   base
+  fidelity     point        input/chaotic_<shape>_point.nml                                  base
+               stokes, none input/quiescent_<shape>_{stokes,none}.nml with the chaotic
+                            protocol's gap 2 um, 4.2 mm/s, random approach, 3 ms, paper end
+  The dt of each grid is 0.8 of the explicit diffusion limit dx^2 / (12 nu) (docs/decks.md, &run dt).
+  Batches: OUT/<shape>-<variant>; the 'base' batch serves every knob that has it as reference.
+
+  0. the converged forced field of each grid (output/hit_box_<n>/final_field.h5; input/hit_box.nml
+     on that grid, computed first when missing: about 1 h at 128^3, 3-4 h at 192^3, 8-9 h at
+     256^3 on 2 cores (estimates), or on a cluster with --slurm)
+  1. the batches; field snapshots off (--set output.field_interval=0.0)
+  2. OUT/manifest.tsv (knob, variant, shape, batch, reference) and tools/speed_accuracy.py:
+     OUT/analysis/ (per knob variant against its reference on the shared seeds: outcome agreement,
+     first-collision normal velocity and chi_eta errors, maximum particle speed error, cost per run
+     and per simulated ms; comparison.csv, speed_accuracy.md, Pareto plots per metric)
+  3. OUT/batch_times.tsv (every local batch call) and OUT/batch_costs.tsv (per batch)
+
+Options of this study:
+  -N, --runs N           seeds per shape (default 20)
+      --runs-256 M       seeds of the 256^3 subset (default 5; 0 skips it)
+      --shapes "A B"     shapes (default "needle disk sphere")
+      --knobs "K ..."    knobs (default "grid geometry load_method coupling diffusion substep fidelity")
+
+Crank-Nicolson with free particles is refused by the code until it is lifted (docs/decks.md,
+&scene particle_coupling): the diffusion batches then fail at once, and say so.
+EOF
+}
+
+source "$(dirname "${BASH_SOURCE[0]}")/study_lib.sh"
+study_parse_arguments "$@"
+runs=20 runs_256=5 shapes="needle disk sphere"
+knobs="grid geometry load_method coupling diffusion substep fidelity"
+set -- "${study_extra_arguments[@]}"
+while [ $# -gt 0 ]; do
+  case "$1" in
+    -N|--runs) runs=${2:?}; shift 2 ;;
+    --runs-256) runs_256=${2:?}; shift 2 ;;
+    --shapes) shapes=${2:?}; shift 2 ;;
+    --knobs) knobs=${2:?}; shift 2 ;;
+    *) study_die "unknown argument '$1' (see --help)" ;;
+  esac
+done
+[[ $runs =~ ^[1-9][0-9]*$ ]] || study_die "--runs '$runs' is not an integer >= 1"
+[[ $runs_256 =~ ^[0-9]+$ ]] || study_die "--runs-256 '$runs_256' is not an integer >= 0"
+read -r -a shape_list <<< "$shapes"
+read -r -a knob_list <<< "$knobs"
+for knob in "${knob_list[@]}"; do
+  [[ $knob =~ ^(grid|geometry|load_method|coupling|diffusion|substep|fidelity)$ ]] || \
+    study_die "--knobs: unknown knob '$knob'"
+done
+
+quiet=(--set output.field_interval=0.0)
+manifest_rows=()
+declare -A declared=()
+# variant KNOB VARIANT REFERENCE DECK RUNS [--set ...]: one batch per shape (SHAPE in DECK and the
+# --set values is replaced by the shape), run once even when several knobs list it.
+variant() {
+  local knob=$1 name=$2 reference=$3 deck=$4 count=$5 shape; shift 5
+  for shape in "${shape_list[@]}"; do
+    manifest_rows+=("$knob"$'\t'"$name"$'\t'"$shape"$'\t'"$shape-$name"$'\t'"$reference")
+    [ -n "${declared[$shape-$name]+x}" ] && continue
+    declared[$shape-$name]=1
+    local -a sets=("${@//SHAPE/$shape}")
+    study_batch "$shape-$name" "${deck//SHAPE/$shape}" "$count" "${sets[@]}"
+  done
+}
+grid_sets() {  # n dt substeps -> --set values of a grid variant
+  printf '%s\n' --set "grid.nx=$1" --set "grid.ny=$1" --set "grid.nz=$1" --set "run.dt=$2" \
+    --set "scene.particle_substeps=$3" --set "fluid.init_file='output/hit_box_$1/final_field.h5'"
+}
+resolved=input/chaotic_SHAPE_resolved.nml
+chaotic_protocol=(--set pair.gap=2.0e-6 --set pair.relative_speed=4.2e-3 --set "pair.approach='random'"
+                  --set pair.mirror_first_collision=.false. --set run.end_time=3.0e-3 --set "pair.end_rule='paper'")
+for knob in "${knob_list[@]}"; do
+  case $knob in
+    grid)
+      mapfile -t sets < <(grid_sets 96 7.2e-6 36); variant grid grid96 grid192 "$resolved" "$runs" "${quiet[@]}" "${sets[@]}"
+      variant grid base grid192 "$resolved" "$runs" "${quiet[@]}"
+      mapfile -t sets < <(grid_sets 192 1.8e-6 9); variant grid grid192 grid192 "$resolved" "$runs" "${quiet[@]}" "${sets[@]}"
+      if (( runs_256 > 0 )); then
+        mapfile -t sets < <(grid_sets 256 1.0e-6 5); variant grid grid256 grid192 "$resolved" "$runs_256" "${quiet[@]}" "${sets[@]}"
+      fi ;;
+    geometry)
+      variant geometry base base "$resolved" "$runs" "${quiet[@]}"
+      for level in 1 2 3; do
+        faces=$((20 * 4 ** level))
+        variant geometry "mesh$faces" base "$resolved" "$runs" "${quiet[@]}" --set "bodies.geometry='mesh'" \
+          --set "bodies.mesh_level=$level"
+      done ;;
+    load_method)
+      variant load_method base base "$resolved" "$runs" "${quiet[@]}"
+      variant load_method surface base "$resolved" "$runs" "${quiet[@]}" --set "bodies.load_method='surface'" ;;
+    coupling)
+      variant coupling base base "$resolved" "$runs" "${quiet[@]}"
+      variant coupling explicit base "$resolved" "$runs" "${quiet[@]}" --set "scene.ibm_coupling='explicit'" ;;
+    diffusion)
+      variant diffusion base base "$resolved" "$runs" "${quiet[@]}"
+      for factor in 2 5 10; do
+        variant diffusion "cn$factor" base "$resolved" "$runs" "${quiet[@]}" \
+          --set "fluid.viscous_scheme='crank_nicolson'" --set "run.dt=$(awk -v f="$factor" 'BEGIN { printf "%.1e", 4.0e-6 * f }')" \
+          --set "scene.particle_substeps=$((20 * factor))"
+      done ;;
+    substep)
+      variant substep base base "$resolved" "$runs" "${quiet[@]}"
+      for pair in 5e-7:8 1e-6:4 2e-6:2; do
+        variant substep "substep${pair%%:*}" base "$resolved" "$runs" "${quiet[@]}" --set "scene.particle_substeps=${pair##*:}"
+      done ;;
+    fidelity)
+      variant fidelity base base "$resolved" "$runs" "${quiet[@]}"
+      variant fidelity point base input/chaotic_SHAPE_point.nml "$runs" "${quiet[@]}"
+      variant fidelity stokes base input/quiescent_SHAPE_stokes.nml "$runs" "${chaotic_protocol[@]}"
+      variant fidelity none base input/quiescent_SHAPE_none.nml "$runs" "${chaotic_protocol[@]}" ;;
+  esac
+done
+
+if [ "$study_mode" != list ]; then
+  { printf 'knob\tvariant\tshape\tbatch\treference\n'; printf '%s\n' "${manifest_rows[@]}"; } > "$study_out/manifest.tsv"
+fi
+if [ "$study_mode" = run ] && (( study_analysis )); then
+  echo "== speed-accuracy analysis -> $study_out/analysis"
+  "$study_python" "$study_tools/speed_accuracy.py" "$study_out/manifest.tsv" -o "$study_out/analysis" \
+    | tee "$study_out/analysis.txt" || study_status_all=1
+fi
+study_finish
