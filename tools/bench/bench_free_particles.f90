@@ -11,10 +11,12 @@
 !>   boxes cells_i^3 (default 32, 40, 48): the body-frame mobilities, extrapolated in the box size
 !>   as in the rung-6 ladder (1/c - 2.837 r/L + C (r/L)^3 through two successive boxes), the
 !>   settling speed and drift angle against Oberbeck/Perrin (module stokes_resistance), the turn.
-!> - release [cells diameter_cells density_ratio response_times]: the quadrature of the unsteady
+!> - release [cells diameter_cells density_ratio viscous_number]: the quadrature of the unsteady
 !>   Stokes reference (module unsteady_stokes) against its Laplace inversion and its own halved
-!>   steps; then the resolved sphere released at U_0 in fluid at rest (module released_sphere_case),
-!>   default D/dx 8 in 32^3 and 48^3 at the density ratios 2.72 and 1, against the reference.
+!>   steps; then the resolved sphere released at U_0 in fluid at rest (module released_sphere_case)
+!>   over tau_p against the reference: by default D/dx 8, 12 and 16 in boxes of 4 to 8 D, two
+!>   smaller steps, and the density ratio 1 with and without the added-mass stabilisation at two
+!>   steps (the sixth argument 0 switches the stabilisation off).
 !> Prints Markdown tables.
 program bench_free_particles
   use agglo_kinds, only: wp
@@ -136,8 +138,8 @@ contains
     if (is_root()) then
       print '(a,f4.1,a,3(i0,1x))', 'Spheroids settling at 45 degrees, thin dimension ', thin, ' cells, boxes ', cells(1:boxes)
       print '(a)', '| shape | box | r/L | 6 pi mu r M along / across | |U_s| / Hasimoto-only | drift angle, '// &
-          'Hasimoto-only (deg) | turn (deg) | spin | steps | wall s |'
-      print '(a)', '|---|---|---|---|---|---|---|---|---|---|'
+          'Hasimoto-only (deg) | turn (deg) | spin | momentum | steps | wall s |'
+      print '(a)', '|---|---|---|---|---|---|---|---|---|---|---|'
     end if
     do s = 1, size(shapes)
       do b = 1, boxes
@@ -147,12 +149,13 @@ contains
         raw(:, b) = result(b)%mobility_body(1:2)
         box_reference = periodic_slip_reference(result(b)%body_shape, result(b)%rotation, result(b)%weight, &
                                                 result(b)%viscosity, result(b)%box, [0.0_wp, 0.0_wp])
-        if (is_root()) print '(a,a,a,i0,a,f6.4,a,f7.4,a,f7.4,a,f6.3,a,f6.2,a,f6.2,a,es8.1,a,es8.1,a,i0,a,f6.1,a)', '| ', &
-            trim(shapes(s)), ' | ', cells(b), '^3 | ', ratio(b), ' | ', raw(1, b), ' / ', raw(2, b), ' | ', &
+        if (is_root()) print '(a,a,a,i0,a,f6.4,a,f7.4,a,f7.4,a,f6.3,a,f6.2,a,f6.2,a,es8.1,a,es8.1,a,es8.1,a,i0,a,f6.1,a)', &
+            '| ', trim(shapes(s)), ' | ', cells(b), '^3 | ', ratio(b), ' | ', raw(1, b), ' / ', raw(2, b), ' | ', &
             norm2(result(b)%slip_vector) / norm2(box_reference), ' | ', &
             drift_angle_degrees(result(b)%slip_vector, result(b)%weight), ', ', &
             drift_angle_degrees(box_reference, result(b)%weight), ' | ', result(b)%turn_degrees, ' | ', result(b)%spin, &
-            ' | ', result(b)%steps, trim(merge(' |           ', ' (unsteady) |', result(b)%steady)), result(b)%wall_seconds, ' |'
+            ' | ', result(b)%momentum, ' | ', result(b)%steps, trim(merge(' |           ', ' (unsteady) |', result(b)%steady)), &
+            result(b)%wall_seconds, ' |'
       end do
       c = spheroid_resistance_coefficients(result(1)%body_shape%a, result(1)%body_shape%b)
       unbounded = periodic_slip_reference(result(1)%body_shape, result(1)%rotation, result(1)%weight, &
@@ -210,17 +213,31 @@ contains
         release_decay_laplace(sphere, tau, 16), ' / ', release_decay_laplace(sphere, tau, 32)
     if (is_root()) then
       print '(a)', 'Resolved release against the reference (U_p / U_0; late: t >= 0.05 tau_p; displacement over [0, tau_p])'
-      print '(a)', '| box | D/dx | rho_p/rho_f | nu dt/dx^2 | steps | U_p/U_0 steps 1-3 (ref) | max diff | max rel. late '// &
-          '| displacement | rel. at tau_p | momentum | wall s |'
-      print '(a)', '|---|---|---|---|---|---|---|---|---|---|---|---|'
+      print '(a)', '| box | D/dx | rho_p/rho_f | stabilised | nu dt/dx^2 | steps | U_p/U_0 steps 1-3 | max diff | '// &
+          'max rel. late | displacement | rel. at tau_p | momentum | wall s |'
+      print '(a)', '|---|---|---|---|---|---|---|---|---|---|---|---|---|'
     end if
     cells = nint(real_argument(2, 0.0_wp))
     if (cells > 0) then
       call release_row(release_case_t(cells=cells, diameter_cells=real_argument(3, 8.0_wp), &
-                                      density_ratio=real_argument(4, 2.72_wp), viscous_number=real_argument(5, 0.06_wp)))
+                                      density_ratio=real_argument(4, 2.72_wp), viscous_number=real_argument(5, 0.06_wp), &
+                                      stabilise=real_argument(6, 1.0_wp) > 0.5_wp))
       return
     end if
-    call release_row(release_case_t(cells=32, diameter_cells=8.0_wp, density_ratio=2.72_wp))
+    ! The box (4, 6, 8 D at D/dx 8; 4, 6 D at 12; 4 D at 16), the step, the density ratio.
+    call release_row(release_case_t(cells=32, diameter_cells=8.0_wp))
+    call release_row(release_case_t(cells=48, diameter_cells=8.0_wp))
+    call release_row(release_case_t(cells=64, diameter_cells=8.0_wp))
+    call release_row(release_case_t(cells=48, diameter_cells=12.0_wp))
+    call release_row(release_case_t(cells=72, diameter_cells=12.0_wp))
+    call release_row(release_case_t(cells=64, diameter_cells=16.0_wp))
+    call release_row(release_case_t(cells=32, diameter_cells=8.0_wp, viscous_number=0.03_wp))
+    call release_row(release_case_t(cells=32, diameter_cells=8.0_wp, viscous_number=0.015_wp))
+    call release_row(release_case_t(cells=48, diameter_cells=8.0_wp, density_ratio=1.0_wp))
+    call release_row(release_case_t(cells=48, diameter_cells=8.0_wp, density_ratio=1.0_wp, stabilise=.false.))
+    call release_row(release_case_t(cells=48, diameter_cells=8.0_wp, density_ratio=1.0_wp, viscous_number=0.015_wp))
+    call release_row(release_case_t(cells=48, diameter_cells=8.0_wp, density_ratio=1.0_wp, viscous_number=0.015_wp, &
+                                    stabilise=.false.))
   end subroutine release_section
 
   !> One resolved release against the reference on the run's own steps (refined 16 times): the
@@ -233,8 +250,10 @@ contains
     type(release_comparison_t) :: comparison
     call run_released_sphere(case, result)
     call compare_release(result, refine, 0.05_wp, comparison)
-    if (is_root()) print '(a,i0,a,f5.2,a,f4.2,a,f6.4,a,i0,a,f7.4,a,f7.4,a,f7.4,a,f8.4,a,f7.4,a,f8.5,a,es8.1,a,f7.1,a)', &
-        '| ', case%cells, '^3 | ', case%diameter_cells, ' | ', case%density_ratio, ' | ', case%viscous_number, ' | ', &
+    if (is_root()) print '(a,3f8.4)', '  reference after steps 1-3:', comparison%first_reference
+    if (is_root()) print '(a,i0,a,f5.2,a,f4.2,a,a,a,f6.4,a,i0,a,3(f7.4,a),f7.4,a,f7.4,a,f8.4,a,f8.4,a,f8.5,a,f7.1,a)', &
+        '| ', case%cells, '^3 | ', case%diameter_cells, ' | ', case%density_ratio, ' | ', &
+        merge('yes', 'no ', case%stabilise), ' | ', case%viscous_number, ' | ', &
         comparison%steps, ' | ', comparison%first(1), ', ', comparison%first(2), ', ', comparison%first(3), ' | ', &
         comparison%largest_difference, ' | ', comparison%largest_relative_late, ' | ', comparison%displacement_error, &
         ' | ', comparison%final_relative, ' | ', result%momentum, ' | ', result%wall_seconds, ' |'
