@@ -11,7 +11,6 @@
 module released_sphere_case
   use agglo_kinds, only: wp
   use error_handling, only: fatal
-  use physical_constants, only: pi
   use parallel_env, only: global_sum
   use wall_clock, only: wall_time
   use config_grid, only: grid_config_t

@@ -130,6 +130,7 @@ contains
       call fatal('settling_sphere_case: shape '''//trim(case%shape)//''' is not sphere, needle or disk')
     end select
     shape(1) = make_spheroid(trim(case%shape), radius, case%density_ratio * density)
+    call require_inside_faces(shape(1), start, 0.5_wp * box + case%offset_cells * solver%grid%dx, solver%grid%dx)
     call rigid_body_of_spheroid(body(1), shape(1), 0.5_wp * box + case%offset_cells * solver%grid%dx, &
                                 start, [0.0_wp, 0.0_wp, 0.0_wp], [0.0_wp, 0.0_wp, 0.0_wp])
     models%integrator = integrator_euler
@@ -187,6 +188,21 @@ contains
                        + system%bodies(1)%mass * system%bodies(1)%velocity(1)) / (density * box**3 * slip(1))
     result%wall_seconds = wall_time() - t0
   end subroutine run_settling_sphere
+
+  !> The slip is measured on the box's faces: the body (with a ghost layer of 2 cells) must not reach them.
+  subroutine require_inside_faces(shape, orientation, centre, dx)
+    type(spheroid_t), intent(in) :: shape
+    real(wp), intent(in) :: orientation(4), centre(3), dx
+    real(wp) :: axis(3), reach(3)
+    character(len=200) :: text
+    axis = matmul(rotation_matrix(orientation), [1.0_wp, 0.0_wp, 0.0_wp])
+    ! Half extent of the spheroid along lab direction i: sqrt(a^2 e_i^2 + b^2 (1 - e_i^2)), e its axis.
+    reach = sqrt(shape%a**2 * axis**2 + shape%b**2 * (1.0_wp - axis**2)) + 2.0_wp * dx
+    if (all(centre - reach > 0.0_wp .and. centre + reach < box)) return
+    write(text, '(a,3f7.2,a)') 'settling_sphere_case: the body reaches a box face (half extents in cells', reach / dx, &
+        '): a larger box (cells) or a smaller body'
+    call fatal(trim(text))
+  end subroutine require_inside_faces
 
   !> The fluid's flux through the box's x-, y- and z-faces (the planes i, j, k = n at the box edge)
   !> over their area (collective: the z-face lies on the rank holding global k = n).
