@@ -17,8 +17,8 @@
 !> - it does not turn (a fore-aft symmetric body in a centrosymmetric array feels no torque while it
 !>   translates): below 0.01 degrees over the run, its rim speed below 0.1 of the settling speed;
 !> - the box's momentum along gravity (fluid nodes and needle, over rho_f L^3 U_s) stays below 1e-4
-!>   (measured 2.8e-5; the settling sphere's is 5e-10: the needle's surface crosses grid nodes as it
-!>   moves, and a node changing status carries its momentum across the budget's boundary).
+!>   (measured 2.8e-5; the settling sphere's is 5e-10; presumably nodes changing status as the
+!>   needle's surface moves across them carry momentum across the budget's boundary: not investigated).
 program test_free_tilted_settling
   use agglo_kinds, only: wp
   use parallel_env, only: parallel_start

@@ -227,6 +227,7 @@ contains
     ! The box (4, 6, 8 D at D/dx 8; 4, 6 D at 12; 4 D at 16), the step, the density ratio.
     call release_row(release_case_t(cells=32, diameter_cells=8.0_wp))
     call release_row(release_case_t(cells=48, diameter_cells=8.0_wp))
+    call release_row(release_case_t(cells=48, diameter_cells=8.0_wp, stabilise=.false.))
     call release_row(release_case_t(cells=64, diameter_cells=8.0_wp))
     call release_row(release_case_t(cells=48, diameter_cells=12.0_wp))
     call release_row(release_case_t(cells=72, diameter_cells=12.0_wp))
