@@ -3,7 +3,7 @@
 !> reference is the Oberbeck/Perrin mobility (module stokes_resistance) with the periodic array's
 !> box correction, per body axis 6 pi mu r M_i = 1/c_i - 2.837 r/L + C_i (r/L)^3 (Hasimoto 1959,
 !> J. Fluid Mech. 5, 317; module settling_sphere_case): the ladder of make validate (bench_free_particles
-!> spheroids) extrapolates the two coefficients from boxes 32^3 and 40^3 to within 1.5% of
+!> spheroids) extrapolates the two coefficients from boxes 32^3 and 40^3 to within 1.6% of
 !> Oberbeck/Perrin and the drift angle to within 1%. This fast check runs the ladder's 32^3 box
 !> (thin dimension 4.4 cells, r/L = 0.118), stopped earlier (relative change of the slip below
 !> 2e-6 per step), and asserts:
