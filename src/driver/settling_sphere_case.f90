@@ -9,6 +9,19 @@
 !> (Re below 1e-4). Steady: the relative change of U_s per step below steady_tolerance.
 !> Also the box's momentum rho_f dV sum_{fluid u nodes} u + m U_p (zero: no net force on the box),
 !> over rho_f L^3 U_s.
+!>
+!> shape = 'needle' or 'disk' (aspect 5; volume-equivalent radius r from thin_cells, the thinnest
+!> dimension in cells) with its symmetry axis turned by tilt_degrees about z away from gravity:
+!> the body is free to translate and rotate, and the slip is a vector, U_s,i = U_p,i - U_face,i,
+!> U_face,i the flux through the box's i-face over its area (planes the body never cuts). In the
+!> periodic array the slip is U_s = M W with the box mobility, per body axis (periodic_slip_reference)
+!>   6 pi mu r M_i = 1/c_i - 2.837 r/L + C_i (r/L)^3
+!> (Hasimoto 1959, J. Fluid Mech. 5, 317: the O(r/L) term is the point-force lattice's, the same
+!> for every shape), c_i the Oberbeck/Perrin coefficients of module stokes_resistance. The
+!> body-frame slip over the body-frame weight gives the measured 6 pi mu r M_i (mobility_body).
+!> A fore-aft symmetric body in a centrosymmetric array feels no torque while it translates, so it
+!> does not turn; the grid's sampling asymmetry makes it turn slowly (turn_degrees over the run,
+!> spin: its last |Omega| times the long semi-axis over |U_s|).
 module settling_sphere_case
   use agglo_kinds, only: wp
   use error_handling, only: fatal
@@ -20,7 +33,9 @@ module settling_sphere_case
   use fluid_solver, only: fluid_solver_t, fluid_solver_create
   use forcing_driver, only: forcing_driver_t
   use spheroid, only: spheroid_t, make_spheroid
-  use rigid_body, only: rigid_body_t, rigid_body_of_spheroid, integrator_euler
+  use rigid_body, only: rigid_body_t, rigid_body_of_spheroid, integrator_euler, angular_velocity_lab
+  use quaternion, only: quaternion_from_axis_angle, rotation_matrix
+  use stokes_resistance, only: spheroid_resistance_coefficients
   use particle_system, only: particle_system_t, particle_models_t, particle_loads_t, particle_system_create, &
                              particle_system_interact, particle_system_step, particle_loads_zero
   use immersed_boundary, only: ibm_settings_t
@@ -28,7 +43,7 @@ module settling_sphere_case
   use resolved_hydrodynamics, only: resolved_hydrodynamics_t, resolved_hydrodynamics_create
   implicit none
   private
-  public :: settling_case_t, settling_result_t, run_settling_sphere
+  public :: settling_case_t, settling_result_t, run_settling_sphere, periodic_slip_reference, drift_angle_degrees
 
   type :: settling_case_t
     integer :: cells = 13                        !< cells per box edge
@@ -41,6 +56,9 @@ module settling_sphere_case
     real(wp) :: steady_tolerance = 1.0e-8_wp
     integer :: max_steps = 20000
     real(wp) :: offset_cells(3) = [0.13_wp, 0.27_wp, 0.41_wp]   !< sphere centre - box centre, cells
+    character(len=8) :: shape = 'sphere'         !< 'sphere', or 'needle' / 'disk' of aspect 5
+    real(wp) :: thin_cells = 0                   !< spheroids: thinnest dimension in cells (sets r)
+    real(wp) :: tilt_degrees = 0                 !< spheroids: symmetry axis from gravity (x), turned about z
   end type settling_case_t
 
   type :: settling_result_t
@@ -48,6 +66,16 @@ module settling_sphere_case
     real(wp) :: diameter_cells = 0         !< D / dx
     real(wp) :: slip = 0                   !< m/s, U_s
     real(wp) :: momentum = 0               !< the box's momentum / (rho_f L^3 U_s)
+    real(wp) :: slip_vector(3) = 0         !< m/s, U_s per lab direction
+    real(wp) :: weight(3) = 0              !< N, the net weight W (lab)
+    real(wp) :: radius = 0                 !< m, volume-equivalent
+    type(spheroid_t) :: body_shape         !< the body settled
+    real(wp) :: box = 0                    !< m, L
+    real(wp) :: viscosity = 0              !< Pa s, mu
+    real(wp) :: rotation(3, 3) = 0         !< body to lab at the start
+    real(wp) :: mobility_body(3) = 0       !< 6 pi mu r U_s,i / W_i along the body axes (start orientation)
+    real(wp) :: turn_degrees = 0           !< angle the body turned over the run
+    real(wp) :: spin = 0                   !< last |Omega| times the long semi-axis over |U_s|
     integer :: steps = 0
     logical :: steady = .false.
     real(wp) :: wall_seconds = 0
@@ -73,7 +101,8 @@ contains
     type(particle_loads_t) :: loads
     type(ibm_settings_t) :: settings
     type(resolved_hydrodynamics_t) :: provider
-    real(wp) :: radius, gravity(3), dt, slip, slip_old, u_face, fluid_flux, t0
+    real(wp) :: radius, gravity(3), dt, slip(3), slip_old(3), u_face(3), fluid_flux, t0, start(4), overlap
+    real(wp) :: weight_body(3), slip_body(3)
     integer :: step, substep, n, nz
 
     t0 = wall_time()
@@ -88,10 +117,23 @@ contains
     call fluid_solver_create(solver, grid_cfg, fluid_cfg)
     solver%u = 0; solver%v = 0; solver%w = 0; solver%pressure = 0
     nz = solver%grid%nz_local
-    radius = (3.0_wp * case%volume_fraction / (4.0_wp * pi))**(1.0_wp / 3.0_wp) * box
-    shape(1) = make_spheroid('sphere', radius, case%density_ratio * density)
+    start = [1.0_wp, 0.0_wp, 0.0_wp, 0.0_wp]
+    select case (trim(case%shape))
+    case ('sphere')
+      radius = (3.0_wp * case%volume_fraction / (4.0_wp * pi))**(1.0_wp / 3.0_wp) * box
+    case ('needle', 'disk')
+      if (.not. case%thin_cells > 0.0_wp) call fatal('settling_sphere_case: thin_cells must be > 0 for a spheroid')
+      ! Aspect 5, r^3 = a b^2: the needle's thin dimension 2b = 2 r / 5^(1/3), the disk's 2a = 2 r / 25^(1/3).
+      radius = 0.5_wp * case%thin_cells * solver%grid%dx * merge(5.0_wp**(1.0_wp / 3.0_wp), 25.0_wp**(1.0_wp / 3.0_wp), &
+                                                                 trim(case%shape) == 'needle')
+      start = quaternion_from_axis_angle([0.0_wp, 0.0_wp, 1.0_wp], case%tilt_degrees * pi / 180.0_wp)
+    case default
+      call fatal('settling_sphere_case: shape '''//trim(case%shape)//''' is not sphere, needle or disk')
+    end select
+    shape(1) = make_spheroid(trim(case%shape), radius, case%density_ratio * density)
+    call require_inside_faces(shape(1), start, 0.5_wp * box + case%offset_cells * solver%grid%dx, solver%grid%dx)
     call rigid_body_of_spheroid(body(1), shape(1), 0.5_wp * box + case%offset_cells * solver%grid%dx, &
-                                [1.0_wp, 0.0_wp, 0.0_wp, 0.0_wp], [0.0_wp, 0.0_wp, 0.0_wp], [0.0_wp, 0.0_wp, 0.0_wp])
+                                start, [0.0_wp, 0.0_wp, 0.0_wp], [0.0_wp, 0.0_wp, 0.0_wp])
     models%integrator = integrator_euler
     call particle_system_create(system, shape, body, models, [box, box, box])
     call particle_system_interact(system, 1.0_wp)
@@ -113,23 +155,92 @@ contains
         call provider%loads(system, real(substep - 1, wp) / case%substeps, loads)
         call particle_system_step(system, dt / case%substeps, loads)
       end do
-      u_face = global_sum(sum(solver%u(n, 1:n, 1:nz))) / real(n * n, wp)
-      slip = system%bodies(1)%velocity(1) - u_face
+      u_face = face_velocity(solver)
+      slip = system%bodies(1)%velocity - u_face
       result%steps = step
-      if (step > 50 .and. abs(slip - slip_old) <= case%steady_tolerance * abs(slip)) then
+      if (step > 50 .and. norm2(slip - slip_old) <= case%steady_tolerance * norm2(slip)) then
         result%steady = .true.
         exit
       end if
       slip_old = slip
     end do
-    result%slip = slip
-    result%drag_coefficient = weight / (6.0_wp * pi * density * viscosity * radius * slip)
+    result%slip = slip(1)
+    result%slip_vector = slip
+    result%drag_coefficient = weight / (6.0_wp * pi * density * viscosity * radius * slip(1))
     result%diameter_cells = 2.0_wp * radius / solver%grid%dx
+    result%weight = provider%weight(:, 1)
+    result%radius = radius
+    result%body_shape = shape(1)
+    result%box = box
+    result%viscosity = density * viscosity
+    result%rotation = rotation_matrix(start)
+    weight_body = matmul(result%weight, result%rotation)
+    slip_body = matmul(slip, result%rotation)
+    where (abs(weight_body) > 1.0e-6_wp * norm2(weight_body))
+      result%mobility_body = 6.0_wp * pi * result%viscosity * radius * slip_body / weight_body
+    end where
+    overlap = min(1.0_wp, abs(dot_product(start, system%bodies(1)%quaternion)))
+    result%turn_degrees = 2.0_wp * acos(overlap) * 180.0_wp / pi
+    result%spin = norm2(angular_velocity_lab(system%bodies(1))) * max(shape(1)%a, shape(1)%b) / norm2(slip)
     associate (status => provider%scene%ibm%geometry%component(1)%status)
       fluid_flux = global_sum(sum(solver%u(1:n, 1:n, 1:nz), mask=status(1:n, 1:n, 1:nz) == node_fluid))
     end associate
     result%momentum = (density * solver%grid%dx * solver%grid%dy * solver%grid%dz * fluid_flux &
-                       + system%bodies(1)%mass * system%bodies(1)%velocity(1)) / (density * box**3 * slip)
+                       + system%bodies(1)%mass * system%bodies(1)%velocity(1)) / (density * box**3 * slip(1))
     result%wall_seconds = wall_time() - t0
   end subroutine run_settling_sphere
+
+  !> The slip is measured on the box's faces: the body (with a ghost layer of 2 cells) must not reach them.
+  subroutine require_inside_faces(shape, orientation, centre, dx)
+    type(spheroid_t), intent(in) :: shape
+    real(wp), intent(in) :: orientation(4), centre(3), dx
+    real(wp) :: axis(3), reach(3)
+    character(len=200) :: text
+    axis = matmul(rotation_matrix(orientation), [1.0_wp, 0.0_wp, 0.0_wp])
+    ! Half extent of the spheroid along lab direction i: sqrt(a^2 e_i^2 + b^2 (1 - e_i^2)), e its axis.
+    reach = sqrt(shape%a**2 * axis**2 + shape%b**2 * (1.0_wp - axis**2)) + 2.0_wp * dx
+    if (all(centre - reach > 0.0_wp .and. centre + reach < box)) return
+    write(text, '(a,3f7.2,a)') 'settling_sphere_case: the body reaches a box face (half extents in cells', reach / dx, &
+        '): a larger box (cells) or a smaller body'
+    call fatal(trim(text))
+  end subroutine require_inside_faces
+
+  !> The fluid's flux through the box's x-, y- and z-faces (the planes i, j, k = n at the box edge)
+  !> over their area (collective: the z-face lies on the rank holding global k = n).
+  function face_velocity(solver) result(u_face)
+    type(fluid_solver_t), intent(in) :: solver
+    real(wp) :: u_face(3), local(3)
+    integer :: n, nz
+    n = solver%grid%nx
+    nz = solver%grid%nz_local
+    local(1) = sum(solver%u(n, 1:n, 1:nz))
+    local(2) = sum(solver%v(1:n, n, 1:nz))
+    local(3) = 0
+    if (solver%grid%z_offset + nz == solver%grid%nz) local(3) = sum(solver%w(1:n, 1:n, nz))
+    u_face = [global_sum(local(1)), global_sum(local(2)), global_sum(local(3))] / real(n * n, wp)
+  end function face_velocity
+
+  !> The slip velocity (lab, m/s) of a spheroid settling under the net weight (lab, N) in the
+  !> periodic cube of edge box (module header): U_s = R diag(M_i) R^T W, R = rotation (body to lab),
+  !> 6 pi mu r M_i = 1/c_i - 2.837 r/L + cubic_i (r/L)^3 with c_i the Oberbeck/Perrin coefficients
+  !> [axial, transverse]; cubic = 0 keeps Hasimoto's leading term only.
+  pure function periodic_slip_reference(shape, rotation, weight, viscosity, box, cubic) result(slip)
+    type(spheroid_t), intent(in) :: shape
+    real(wp), intent(in) :: rotation(3, 3), weight(3), viscosity, box, cubic(2)
+    real(wp) :: slip(3)
+    real(wp), parameter :: hasimoto = 2.837_wp   ! 1.7601 (4 pi / 3)^(1/3), Hasimoto 1959
+    real(wp) :: c(4), r, mobility(3)
+    c = spheroid_resistance_coefficients(shape%a, shape%b)
+    r = (shape%a * shape%b**2)**(1.0_wp / 3.0_wp)
+    mobility = (1.0_wp / c([1, 2, 2]) - hasimoto * r / box + cubic([1, 2, 2]) * (r / box)**3) &
+               / (6.0_wp * pi * viscosity * r)
+    slip = matmul(rotation, mobility * matmul(weight, rotation))
+  end function periodic_slip_reference
+
+  !> The angle (degrees) between a velocity and the direction of the weight.
+  pure real(wp) function drift_angle_degrees(velocity, weight) result(angle)
+    real(wp), intent(in) :: velocity(3), weight(3)
+    angle = acos(max(-1.0_wp, min(1.0_wp, dot_product(velocity, weight) / (norm2(velocity) * norm2(weight))))) &
+            * 180.0_wp / pi
+  end function drift_angle_degrees
 end module settling_sphere_case
