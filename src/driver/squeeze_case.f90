@@ -49,7 +49,7 @@ module squeeze_case
   private
   public :: squeeze_case_t, squeeze_result_t, run_squeeze, brenner_squeeze_coefficient, squeeze_speed, &
             squeeze_dynamic_viscosity
-  public :: free_squeeze_case_t, free_squeeze_history_t, run_free_squeeze, approach_reference
+  public :: free_squeeze_case_t, free_squeeze_history_t, run_free_squeeze, approach_reference, free_squeeze_sample
 
   type :: squeeze_case_t
     real(wp) :: diameter_cells = 8.0_wp          !< D / dx
@@ -80,7 +80,7 @@ module squeeze_case
     integer :: width_cells = 32                  !< n_y = n_z; n_x = 2 n_y
     real(wp) :: start_gap_cells = 5.0_wp         !< h / dx at the start (both spheres at rest)
     real(wp) :: stop_gap_cells = 0.05_wp         !< the run ends when the gap falls below this
-    real(wp) :: push_reynolds = 0.05_wp          !< U_p a / nu (F = 6 pi mu a U_p)
+    real(wp) :: push_reynolds = 0.1_wp           !< U_p a / nu (F = 6 pi mu a U_p)
     real(wp) :: density_ratio = 2.72_wp          !< rho_p / rho_f
     integer :: substeps = 4                      !< particle sub-steps per fluid step
     real(wp) :: viscous_number = 0.06_wp         !< nu dt / dx^2
@@ -308,6 +308,22 @@ contains
     history%added_mass = 0.5_wp * density * shapes(1)%volume
     history%wall_seconds = wall_time() - t0
   end subroutine run_free_squeeze
+
+  !> A history's values where its gap first falls to gap (m), linear between the two fluid steps
+  !> around it; the last value if it never does.
+  pure real(wp) function free_squeeze_sample(history, values, gap) result(value)
+    type(free_squeeze_history_t), intent(in) :: history
+    real(wp), intent(in) :: values(:), gap
+    integer :: s
+    value = values(size(values))
+    do s = 2, size(values)
+      if (history%gap(s) <= gap) then
+        value = values(s - 1) + (gap - history%gap(s - 1)) / (history%gap(s) - history%gap(s - 1)) &
+                * (values(s) - values(s - 1))
+        return
+      end if
+    end do
+  end function free_squeeze_sample
 
   !> The reference approach (module header) of one sphere of mass + added mass inertia under the
   !> push: speed (m/s) and time (s) at which the gap first reaches each of gaps(:) (m, decreasing),

@@ -8,12 +8,13 @@
 !> against the reference's, and the forces along the line of centres over Brenner's at the measured
 !> speed, F_B = 6 pi mu a beta(h) U: the resolved one, the lubrication one and their sum.
 !> Arguments (all optional): D/dx, box width n_y (cells), U_p a / nu, then the hand-over gaps in
-!> cells, 0 meaning lubrication off (default 8 32 0.05 0 1 0.5).
+!> cells, 0 meaning lubrication off (default 8 32 0.1 0 1 0.5).
 program bench_free_squeeze
   use agglo_kinds, only: wp
   use physical_constants, only: pi
   use parallel_env, only: parallel_start, parallel_stop, is_root
   use squeeze_case, only: free_squeeze_case_t, free_squeeze_history_t, run_free_squeeze, approach_reference, &
+                          free_squeeze_sample, &
                           brenner_squeeze_coefficient, squeeze_dynamic_viscosity
   implicit none
   real(wp), parameter :: table_gaps(*) = [4.0_wp, 3.0_wp, 2.0_wp, 1.5_wp, 1.0_wp, 0.75_wp, 0.5_wp, 0.25_wp, 0.1_wp]
@@ -64,10 +65,10 @@ program bench_free_squeeze
     print '(a)', '|---|---|---|---|---|---|---|---|'
     do g = 1, size(table_gaps)
       if (minval(history%gap) > gaps(g)) exit
-      speed = sampled(history%speed)
-      time = sampled(history%time)
-      resolved = sampled(history%resolved)
-      lubricated = sampled(history%lubrication)
+      speed = free_squeeze_sample(history, history%speed, gaps(g))
+      time = free_squeeze_sample(history, history%time, gaps(g))
+      resolved = free_squeeze_sample(history, history%resolved, gaps(g))
+      lubricated = free_squeeze_sample(history, history%lubrication, gaps(g))
       brenner = 6.0_wp * pi * squeeze_dynamic_viscosity * history%radius &
                 * brenner_squeeze_coefficient(gaps(g) / history%radius) * speed
       if (g == 1) then
@@ -97,20 +98,6 @@ contains
     character(len=16) :: text
     write(text, '(g0.3)') value
   end function number
-
-  !> A history's value where the gap first falls to gaps(g) (linear between the two fluid steps).
-  real(wp) function sampled(values)
-    real(wp), intent(in) :: values(:)
-    integer :: s
-    sampled = values(1)
-    do s = 2, size(values)
-      if (history%gap(s) <= gaps(g)) then
-        sampled = values(s - 1) + (gaps(g) - history%gap(s - 1)) / (history%gap(s) - history%gap(s - 1)) &
-                  * (values(s) - values(s - 1))
-        return
-      end if
-    end do
-  end function sampled
 
   function closing_error() result(text)
     character(len=16) :: text
