@@ -135,12 +135,29 @@ contains
     beta = 4.0_wp / 3.0_wp * sinh(alpha) * total
   end function brenner_squeeze_coefficient
 
+  !> The fluid of both cases at rest: 2 n_y x n_y x n_y cells, the x length the 1 mm box, width (m)
+  !> the y and z lengths (n_y cells over half the x length); explicit diffusion, incremental pressure.
+  subroutine squeeze_fluid(width_cells, solver, width)
+    integer, intent(in) :: width_cells
+    type(fluid_solver_t), intent(out) :: solver
+    real(wp), intent(out) :: width
+    type(grid_config_t) :: grid_cfg
+    type(fluid_config_t) :: fluid_cfg
+    width = box * width_cells / (2 * width_cells)
+    grid_cfg = grid_config_t(nx=2 * width_cells, ny=width_cells, nz=width_cells, length_x=box, length_y=width, &
+                             length_z=width)
+    fluid_cfg%density = density
+    fluid_cfg%viscosity = viscosity
+    fluid_cfg%viscous_scheme = 'explicit'
+    fluid_cfg%pressure_scheme = 'incremental'
+    call fluid_solver_create(solver, grid_cfg, fluid_cfg)
+    solver%u = 0; solver%v = 0; solver%w = 0; solver%pressure = 0
+  end subroutine squeeze_fluid
+
   !> Run the case at one gap to steady state (collective).
   subroutine run_squeeze(case, result)
     type(squeeze_case_t), intent(in) :: case
     type(squeeze_result_t), intent(out) :: result
-    type(grid_config_t) :: grid_cfg
-    type(fluid_config_t) :: fluid_cfg
     type(fluid_solver_t) :: solver
     type(immersed_scene_t) :: scene
     type(prescribed_motion_t) :: motion(2)
@@ -149,15 +166,7 @@ contains
     integer :: step, n
 
     t0 = wall_time()
-    width = box * case%width_cells / (2 * case%width_cells)   ! n_y cells over half the x length
-    grid_cfg = grid_config_t(nx=2 * case%width_cells, ny=case%width_cells, nz=case%width_cells, length_x=box, &
-                             length_y=width, length_z=width)
-    fluid_cfg%density = density
-    fluid_cfg%viscosity = viscosity
-    fluid_cfg%viscous_scheme = 'explicit'
-    fluid_cfg%pressure_scheme = 'incremental'
-    call fluid_solver_create(solver, grid_cfg, fluid_cfg)
-    solver%u = 0; solver%v = 0; solver%w = 0; solver%pressure = 0
+    call squeeze_fluid(case%width_cells, solver, width)
 
     h = solver%grid%dx
     radius = 0.5_wp * case%diameter_cells * h
@@ -216,8 +225,6 @@ contains
   subroutine run_free_squeeze(case, history)
     type(free_squeeze_case_t), intent(in) :: case
     type(free_squeeze_history_t), intent(out) :: history
-    type(grid_config_t) :: grid_cfg
-    type(fluid_config_t) :: fluid_cfg
     type(fluid_solver_t) :: solver
     type(forcing_driver_t) :: forcing                  ! inactive
     type(spheroid_t) :: shapes(2)
@@ -232,15 +239,7 @@ contains
     integer :: step, substep, n
 
     t0 = wall_time()
-    width = box * case%width_cells / (2 * case%width_cells)
-    grid_cfg = grid_config_t(nx=2 * case%width_cells, ny=case%width_cells, nz=case%width_cells, length_x=box, &
-                             length_y=width, length_z=width)
-    fluid_cfg%density = density
-    fluid_cfg%viscosity = viscosity
-    fluid_cfg%viscous_scheme = 'explicit'
-    fluid_cfg%pressure_scheme = 'incremental'
-    call fluid_solver_create(solver, grid_cfg, fluid_cfg)
-    solver%u = 0; solver%v = 0; solver%w = 0; solver%pressure = 0
+    call squeeze_fluid(case%width_cells, solver, width)
 
     h = solver%grid%dx
     radius = 0.5_wp * case%diameter_cells * h
@@ -268,13 +267,13 @@ contains
                                        restart=.false., gravity=[0.0_wp, 0.0_wp, 0.0_wp])
     ! The push as the provider's constant external force per body (its net-weight slot): it enters
     ! the added-mass update like a weight, and sums to zero over the pair, so the box needs no drive.
-    history%push = 6.0_wp * pi * density * viscosity * radius * case%push_reynolds * viscosity / radius
+    history%push = 6.0_wp * pi * density * viscosity * radius * (case%push_reynolds * viscosity / radius)   ! U_p
     provider%weight(:, 1) = [history%push, 0.0_wp, 0.0_wp]
     provider%weight(:, 2) = [-history%push, 0.0_wp, 0.0_wp]
     call provider%prepare(solver, system)
     loads = particle_loads_zero(2)
 
-    allocate(rows(6, case%max_steps))
+    allocate(rows(5, case%max_steps))   ! time, gap, speed, resolved, lubrication
     do step = 1, case%max_steps
       rows(3, step) = 0.5_wp * (system%bodies(1)%velocity(1) - system%bodies(2)%velocity(1))
       call provider%fluid_step(solver, forcing, system, dt)

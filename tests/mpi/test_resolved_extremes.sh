@@ -147,7 +147,8 @@ stopped dt_above_diffusion_limit 1 'the stability limit of explicit diffusion on
 # A particle step of 1e-9 s: fluid 1e-7 s, 100 sub-steps (400 particle steps); then the fluid at
 # 1e-9 s itself (the paper's setting: one sub-step).
 if ran particle_step_1e-9 1 "run.dt_mode='fixed'" "run.dt=1.0e-7" "scene.particle_substeps=100" "run.max_steps=4"; then
-  echo "PASS resolved_extremes/particle_step_1e-9  (ran: 400 particle steps of 1e-9 s, final gap $(summary particle_step_1e-9 final_gap) m)"
+  gap=$(summary particle_step_1e-9 final_gap)
+  echo "PASS resolved_extremes/particle_step_1e-9  (ran: 400 particle steps of 1e-9 s, final gap $gap m)"
 fi
 if ran fluid_step_1e-9 1 "run.dt_mode='fixed'" "run.dt=1.0e-9" "scene.particle_substeps=1" "run.max_steps=20"; then
   echo "PASS resolved_extremes/fluid_step_1e-9  (ran: 20 fluid steps of 1e-9 s, final gap $(summary fluid_step_1e-9 final_gap) m)"
@@ -178,7 +179,8 @@ stopped disk_aspect_10_coarse 1 'use &grid nx = ny = nz >=' "pair.shape='disk'" 
 # --- density ratios ---------------------------------------------------------------------------------
 for ratio in 1.0 0.5; do
   if ran density_ratio_$ratio 1 "pair.density=$(python3 -c "print(997.0 * $ratio)")" "run.max_steps=10"; then
-    echo "PASS resolved_extremes/density_ratio_$ratio  (ran: 10 fluid steps, v_n $(summary density_ratio_$ratio final_relative_velocity) m/s)"
+    speed=$(summary density_ratio_$ratio final_relative_velocity)
+    echo "PASS resolved_extremes/density_ratio_$ratio  (ran: 10 fluid steps, v_n $speed m/s)"
   fi
 done
 
@@ -187,9 +189,11 @@ done
 # sub-steps, the second fluid step starts with the pair touching.
 if ran contact_at_step_start 1 "pair.gap=8.0e-9" "run.dt_mode='fixed'" "run.dt=2.0e-6"; then
   collisions=$(summary contact_at_step_start collisions)
-  first=$(python3 -c "import json; print(json.load(open('contact_at_step_start/summary.json'))['first_collision']['time'])" 2>/dev/null)
+  first=$(python3 -c "import json
+print(json.load(open('contact_at_step_start/summary.json'))['first_collision']['time'])" 2>/dev/null)
   if [ "${collisions:-0}" -ge 1 ] && python3 -c "import sys; sys.exit(0 if 0 < $first <= 2.0e-6 else 1)" 2>/dev/null; then
-    echo "PASS resolved_extremes/contact_at_step_start  (ran: first collision at $first s, in the first fluid step; $collisions collision(s))"
+    echo "PASS resolved_extremes/contact_at_step_start  (ran: first collision at $first s, in the first fluid step;" \
+         "$collisions collision(s))"
   else
     echo "FAIL resolved_extremes/contact_at_step_start: collisions ${collisions:-none}, first at ${first:-none}"
   fi
@@ -202,7 +206,8 @@ stopped max_sweeps_near_contact 1 'raise &bodies max_sweeps' "pair.gap=0.1e-6" "
 # it crosses the boundary in the second fluid step. Rank: approach along z, body 1's centre 10 nm
 # below the slab boundary z = L/2 of 2 ranks, crossing it likewise.
 periodic=("pair.centre_position=$(python3 -c "print(40.0e-6 + 1.0e-6 - 1.0e-8)"),0.125e-3,0.125e-3")
-rank=("pair.approach_direction=0.0,0.0,1.0" "pair.centre_position=0.125e-3,0.125e-3,$(python3 -c "print(0.125e-3 + 41.0e-6 - 1.0e-8)")")
+rank=("pair.approach_direction=0.0,0.0,1.0"
+      "pair.centre_position=0.125e-3,0.125e-3,$(python3 -c "print(0.125e-3 + 41.0e-6 - 1.0e-8)")")
 for case in periodic rank; do
   declare -n overrides=$case
   x=$([ "$case" = periodic ] && echo 1 || echo 3)
@@ -213,7 +218,8 @@ v = [float(t) for t in re.findall(r'-?\d\.\d+e[-+]\d+', sys.stdin.read().split('
 c = v[$x - 1::3]
 print('yes' if min(c) < 0.125e-3 < max(c) or (min(c) < 1e-6 and max(c) > 0.2e-3) else 'no')")
     if [ "$crossed" = yes ] && agree ${case}_crossing_1/particles.h5 ${case}_crossing_2/particles.h5 > ${case}_diff.txt 2>&1; then
-      echo "PASS resolved_extremes/${case}_boundary_crossing_1_and_2_ranks  (ran: body 1 crossed; 1 and 2 ranks agree to $(cat ${case}_diff.txt) of each dataset's scale)"
+      echo "PASS resolved_extremes/${case}_boundary_crossing_1_and_2_ranks  (ran: body 1 crossed;" \
+           "1 and 2 ranks agree to $(cat ${case}_diff.txt) of each quantity's scale)"
     else
       echo "FAIL resolved_extremes/${case}_boundary_crossing_1_and_2_ranks: crossed = $crossed; $(head -c 300 ${case}_diff.txt)"
     fi
