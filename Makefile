@@ -178,7 +178,7 @@ validate: deps ## run the immersed-boundary validation ladder (the table in docs
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_immersed_squeeze 12 48 12 4 3 2 1.5 1 0.75 0.5
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_free_particles
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_free_squeeze
-	AGGLO=$(BUILD)/agglo EXTREMES=long bash tests/mpi/test_resolved_extremes.sh
+	AGGLO=$(abspath $(BUILD))/agglo EXTREMES=long bash tests/mpi/test_resolved_extremes.sh
 
 clean: ## remove the build directory
 	rm -rf $(BUILD)
