@@ -35,7 +35,10 @@ module config_bodies
     real(wp) :: oscillation_amplitude(3, max_bodies) = 0      !< m
     real(wp) :: oscillation_frequency(max_bodies) = 0         !< Hz
     real(wp) :: ghost_tolerance = 1.0e-12_wp                  !< ghost-row sweeps stop below this relative change
-    integer :: max_sweeps = 50                                !< sweeps before the run stops (implicit coupling)
+    !> Sweeps before the run stops (implicit coupling). One body takes at most 8; a pair near contact
+    !> far more, growing as the gap closes (up to 157 measured, docs/decks.md, &bodies): a run must
+    !> not stop for that, only for rows that do not converge at all.
+    integer :: max_sweeps = 1000
     character(len=16) :: load_method = 'momentum'             !< 'momentum' | 'surface' (the face sum)
     character(len=16) :: geometry = 'analytic'                !< 'analytic' | 'mesh' (ghost nodes' surface)
     integer :: mesh_level = 2                                 !< icosphere subdivisions: 20 4^level faces (2: 320)

@@ -17,8 +17,9 @@ module config_collision
     real(wp) :: detection_factor = 1.0_wp           !< detection distance = max(floor, factor v_n dt)
     logical :: lubrication = .false.                !< sub-grid normal lubrication force
     !> hand-over gap h_out in cells of &grid (the smallest spacing): the resolved fluid carries the
-    !> squeeze force above it (docs/validation.md, "Lubrication")
-    real(wp) :: lubrication_handover = 1.0_wp
+    !> squeeze force above it; half a cell, where the resolved force stops rising (docs/validation.md,
+    !> "Lubrication": 1 cell counts the squeeze the grid still carries twice)
+    real(wp) :: lubrication_handover = 0.5_wp
     real(wp) :: lubrication_roughness = 1.0e-9_wp   !< m, h_in: the force saturates below this gap
   end type collision_config_t
 

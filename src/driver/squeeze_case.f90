@@ -15,20 +15,41 @@
 !> tests/unit/test_lubrication checks against the series.
 !> The box is 2 n_y cells long along x and n_y = box_diameters D wide: the periodic images of the
 !> pair (a force dipole) change the force by a few per cent at the widest gaps (the table says so).
+!>
+!> The free approach (run_free_squeeze): the same pair, free (&scene particle_coupling = 'resolved',
+!> module resolved_hydrodynamics, the added-mass stabilisation on), pushed together from rest by
+!> constant equal and opposite forces +-F along the line of centres, F = 6 pi mu a U_p (U_p the
+!> speed of one isolated sphere under F), in fluid at rest; optionally with the sub-grid
+!> lubrication of the particle system (module lubrication, hand-over h_out). Recorded every fluid
+!> step: the gap, the approach speed U of each sphere, the resolved force along the line of centres
+!> and the mean lubrication force of the sub-steps. Reference (approach_reference): the one-
+!> dimensional motion of one sphere under F against Brenner's resistance,
+!>   (m + m_a) dU/dt = F - 6 pi mu a beta(h) U,  dh/dt = -2 U,
+!> m_a = rho_f V / 2 (the isolated sphere's added mass; it matters only in the start transient).
+!> The push makes the approach quasi-steady (the gap closes a cell in many viscous times a^2/nu),
+!> so U(h) tends to F / (6 pi mu a beta(h)).
 module squeeze_case
   use agglo_kinds, only: wp
   use physical_constants, only: pi
   use wall_clock, only: wall_time
+  use error_handling, only: fatal
   use config_grid, only: grid_config_t
   use config_fluid, only: fluid_config_t
   use fluid_solver, only: fluid_solver_t, fluid_solver_create
-  use spheroid, only: make_spheroid
+  use spheroid, only: spheroid_t, make_spheroid
   use immersed_boundary, only: ibm_settings_t
   use immersed_scene, only: prescribed_motion_t, immersed_scene_t, immersed_scene_create, immersed_step
+  use forcing_driver, only: forcing_driver_t
+  use rigid_body, only: rigid_body_t, rigid_body_of_spheroid, integrator_euler
+  use particle_system, only: particle_system_t, particle_models_t, particle_loads_t, particle_system_create, &
+                             particle_system_interact, particle_system_step, particle_loads_zero
+  use lubrication, only: lubrication_model_t
+  use resolved_hydrodynamics, only: resolved_hydrodynamics_t, resolved_hydrodynamics_create
   implicit none
   private
   public :: squeeze_case_t, squeeze_result_t, run_squeeze, brenner_squeeze_coefficient, squeeze_speed, &
             squeeze_dynamic_viscosity
+  public :: free_squeeze_case_t, free_squeeze_history_t, run_free_squeeze, approach_reference, free_squeeze_sample
 
   type :: squeeze_case_t
     real(wp) :: diameter_cells = 8.0_wp          !< D / dx
@@ -53,6 +74,40 @@ module squeeze_case
     logical :: steady = .false.
     real(wp) :: wall_seconds = 0
   end type squeeze_result_t
+
+  type :: free_squeeze_case_t
+    real(wp) :: diameter_cells = 8.0_wp          !< D / dx
+    integer :: width_cells = 32                  !< n_y = n_z; n_x = 2 n_y
+    real(wp) :: start_gap_cells = 5.0_wp         !< h / dx at the start (both spheres at rest)
+    real(wp) :: stop_gap_cells = 0.05_wp         !< the run ends when the gap falls below this
+    real(wp) :: push_reynolds = 0.1_wp           !< U_p a / nu (F = 6 pi mu a U_p)
+    real(wp) :: density_ratio = 2.72_wp          !< rho_p / rho_f
+    integer :: substeps = 4                      !< particle sub-steps per fluid step
+    real(wp) :: viscous_number = 0.06_wp         !< nu dt / dx^2
+    logical :: lubrication = .false.             !< the sub-grid lubrication of the particle system
+    real(wp) :: handover_cells = 1.0_wp          !< h_out / dx
+    integer :: max_steps = 40000
+    integer :: max_sweeps = 1000                 !< ghost-row sweeps (near contact they rise to about 90)
+    real(wp) :: offset_cells(3) = [0.31_wp, 0.13_wp, 0.27_wp]   !< gap centre - box centre, cells
+  end type free_squeeze_case_t
+
+  !> One row per fluid step (allocated to the steps taken).
+  type :: free_squeeze_history_t
+    real(wp), allocatable :: time(:)          !< s, end of the fluid step
+    real(wp), allocatable :: gap(:)           !< m, surface gap at the end of the step
+    real(wp), allocatable :: speed(:)         !< m/s, U = (U_1x - U_2x) / 2 imposed in the step (start)
+    real(wp), allocatable :: resolved(:)      !< N, (F_2x - F_1x) / 2 of the immersed boundary, > 0 resisting
+    real(wp), allocatable :: lubrication(:)   !< N, the same of the sub-grid lubrication, mean over the sub-steps
+    real(wp) :: push = 0                      !< N, F
+    real(wp) :: radius = 0                    !< m, a
+    real(wp) :: cell = 0                      !< m, dx
+    real(wp) :: mass = 0                      !< kg, m
+    real(wp) :: added_mass = 0                !< kg, rho_f V / 2
+    integer :: steps = 0
+    integer :: max_sweeps_seen = 0            !< most ghost-row sweeps of one imposition
+    logical :: reached = .false.              !< the gap fell below stop_gap_cells
+    real(wp) :: wall_seconds = 0
+  end type free_squeeze_history_t
 
   ! Water-like units; U a / nu = 1e-5 at D/dx = 8 on a 1 mm box.
   real(wp), parameter :: box = 1.0e-3_wp, viscosity = 1.0e-6_wp, density = 1000.0_wp, speed = 1.0e-7_wp
@@ -80,12 +135,29 @@ contains
     beta = 4.0_wp / 3.0_wp * sinh(alpha) * total
   end function brenner_squeeze_coefficient
 
+  !> The fluid of both cases at rest: 2 n_y x n_y x n_y cells, the x length the 1 mm box, width (m)
+  !> the y and z lengths (n_y cells over half the x length); explicit diffusion, incremental pressure.
+  subroutine squeeze_fluid(width_cells, solver, width)
+    integer, intent(in) :: width_cells
+    type(fluid_solver_t), intent(out) :: solver
+    real(wp), intent(out) :: width
+    type(grid_config_t) :: grid_cfg
+    type(fluid_config_t) :: fluid_cfg
+    width = box * width_cells / (2 * width_cells)
+    grid_cfg = grid_config_t(nx=2 * width_cells, ny=width_cells, nz=width_cells, length_x=box, length_y=width, &
+                             length_z=width)
+    fluid_cfg%density = density
+    fluid_cfg%viscosity = viscosity
+    fluid_cfg%viscous_scheme = 'explicit'
+    fluid_cfg%pressure_scheme = 'incremental'
+    call fluid_solver_create(solver, grid_cfg, fluid_cfg)
+    solver%u = 0; solver%v = 0; solver%w = 0; solver%pressure = 0
+  end subroutine squeeze_fluid
+
   !> Run the case at one gap to steady state (collective).
   subroutine run_squeeze(case, result)
     type(squeeze_case_t), intent(in) :: case
     type(squeeze_result_t), intent(out) :: result
-    type(grid_config_t) :: grid_cfg
-    type(fluid_config_t) :: fluid_cfg
     type(fluid_solver_t) :: solver
     type(immersed_scene_t) :: scene
     type(prescribed_motion_t) :: motion(2)
@@ -94,15 +166,7 @@ contains
     integer :: step, n
 
     t0 = wall_time()
-    width = box * case%width_cells / (2 * case%width_cells)   ! n_y cells over half the x length
-    grid_cfg = grid_config_t(nx=2 * case%width_cells, ny=case%width_cells, nz=case%width_cells, length_x=box, &
-                             length_y=width, length_z=width)
-    fluid_cfg%density = density
-    fluid_cfg%viscosity = viscosity
-    fluid_cfg%viscous_scheme = 'explicit'
-    fluid_cfg%pressure_scheme = 'incremental'
-    call fluid_solver_create(solver, grid_cfg, fluid_cfg)
-    solver%u = 0; solver%v = 0; solver%w = 0; solver%pressure = 0
+    call squeeze_fluid(case%width_cells, solver, width)
 
     h = solver%grid%dx
     radius = 0.5_wp * case%diameter_cells * h
@@ -156,4 +220,148 @@ contains
       end do
     end subroutine hold_in_place
   end subroutine run_squeeze
+  !> The free approach (module header) from rest at start_gap_cells until the gap is below
+  !> stop_gap_cells or max_steps fluid steps (collective).
+  subroutine run_free_squeeze(case, history)
+    type(free_squeeze_case_t), intent(in) :: case
+    type(free_squeeze_history_t), intent(out) :: history
+    type(fluid_solver_t) :: solver
+    type(forcing_driver_t) :: forcing                  ! inactive
+    type(spheroid_t) :: shapes(2)
+    type(rigid_body_t) :: bodies(2)
+    type(particle_models_t) :: models
+    type(particle_system_t) :: system
+    type(particle_loads_t) :: loads
+    type(ibm_settings_t) :: settings
+    type(resolved_hydrodynamics_t) :: provider
+    real(wp) :: h, radius, gap, width, dt, t0, centre(3), lubrication_sum
+    real(wp), allocatable :: rows(:, :)
+    integer :: step, substep, n
+
+    t0 = wall_time()
+    call squeeze_fluid(case%width_cells, solver, width)
+
+    h = solver%grid%dx
+    radius = 0.5_wp * case%diameter_cells * h
+    gap = case%start_gap_cells * h
+    centre = [0.5_wp * box, 0.5_wp * width, 0.5_wp * width] + case%offset_cells * h
+    do n = 1, 2
+      shapes(n) = make_spheroid('sphere', radius, case%density_ratio * density)
+      call rigid_body_of_spheroid(bodies(n), shapes(n), centre + [(2 * n - 3) * (radius + 0.5_wp * gap), 0.0_wp, 0.0_wp], &
+                                  [1.0_wp, 0.0_wp, 0.0_wp, 0.0_wp], [0.0_wp, 0.0_wp, 0.0_wp], [0.0_wp, 0.0_wp, 0.0_wp])
+    end do
+    models%integrator = integrator_euler
+    models%lubrication = case%lubrication
+    ! The roughness far below every gap of the run: the model's force is not saturated.
+    models%lubrication_model = lubrication_model_t(dynamic_viscosity=density * viscosity, &
+                                                   outer_gap=case%handover_cells * h, roughness=1.0e-6_wp * h)
+    call particle_system_create(system, shapes, bodies, models, [box, width, width])
+    dt = case%viscous_number * h**2 / viscosity
+    call particle_system_interact(system, dt / case%substeps)
+
+    settings%coupling = 'implicit'
+    settings%tolerance = 1.0e-12_wp
+    settings%max_sweeps = case%max_sweeps
+    settings%fluid_density = density
+    call resolved_hydrodynamics_create(provider, solver, system, settings, 'momentum', -1, stabilise=.true., &
+                                       restart=.false., gravity=[0.0_wp, 0.0_wp, 0.0_wp])
+    ! The push as the provider's constant external force per body (its net-weight slot): it enters
+    ! the added-mass update like a weight, and sums to zero over the pair, so the box needs no drive.
+    history%push = 6.0_wp * pi * density * viscosity * radius * (case%push_reynolds * viscosity / radius)   ! U_p
+    provider%weight(:, 1) = [history%push, 0.0_wp, 0.0_wp]
+    provider%weight(:, 2) = [-history%push, 0.0_wp, 0.0_wp]
+    call provider%prepare(solver, system)
+    loads = particle_loads_zero(2)
+
+    allocate(rows(5, case%max_steps))   ! time, gap, speed, resolved, lubrication
+    do step = 1, case%max_steps
+      rows(3, step) = 0.5_wp * (system%bodies(1)%velocity(1) - system%bodies(2)%velocity(1))
+      call provider%fluid_step(solver, forcing, system, dt)
+      history%max_sweeps_seen = max(history%max_sweeps_seen, provider%scene%predicted%sweeps)
+      lubrication_sum = 0
+      do substep = 1, case%substeps
+        call provider%loads(system, real(substep - 1, wp) / case%substeps, loads)
+        call particle_system_step(system, dt / case%substeps, loads)
+        lubrication_sum = lubrication_sum + 0.5_wp * (system%lubrication_loads%force(1, 2) &
+                                                      - system%lubrication_loads%force(1, 1))
+      end do
+      if (.not. system%pairs(1)%active) call fatal('free squeeze: the pair''s closest points are not current')
+      rows(1, step) = solver%time
+      rows(2, step) = system%pairs(1)%contact%gap
+      rows(4, step) = 0.5_wp * (provider%force(1, 2) - provider%force(1, 1))
+      rows(5, step) = lubrication_sum / case%substeps
+      history%steps = step
+      if (rows(2, step) < case%stop_gap_cells * h) then
+        history%reached = .true.
+        exit
+      end if
+    end do
+    history%time = rows(1, 1:history%steps)
+    history%gap = rows(2, 1:history%steps)
+    history%speed = rows(3, 1:history%steps)
+    history%resolved = rows(4, 1:history%steps)
+    history%lubrication = rows(5, 1:history%steps)
+    history%radius = radius
+    history%cell = h
+    history%mass = system%bodies(1)%mass
+    history%added_mass = 0.5_wp * density * shapes(1)%volume
+    history%wall_seconds = wall_time() - t0
+  end subroutine run_free_squeeze
+
+  !> A history's values where its gap first falls to gap (m), linear between the two fluid steps
+  !> around it; the last value if it never does.
+  pure real(wp) function free_squeeze_sample(history, values, gap) result(value)
+    type(free_squeeze_history_t), intent(in) :: history
+    real(wp), intent(in) :: values(:), gap
+    integer :: s
+    value = values(size(values))
+    do s = 2, size(values)
+      if (history%gap(s) <= gap) then
+        value = values(s - 1) + (gap - history%gap(s - 1)) / (history%gap(s) - history%gap(s - 1)) &
+                * (values(s) - values(s - 1))
+        return
+      end if
+    end do
+  end function free_squeeze_sample
+
+  !> The reference approach (module header) of one sphere of mass + added mass inertia under the
+  !> push: speed (m/s) and time (s) at which the gap first reaches each of gaps(:) (m, decreasing),
+  !> from rest at start_gap (m). Classical RK4 with the step a fiftieth of the local response time
+  !> (m + m_a) / (6 pi mu a beta), which near contact shrinks with the gap.
+  subroutine approach_reference(push, radius, inertia, start_gap, gaps, speed, time)
+    real(wp), intent(in) :: push, radius, inertia, start_gap, gaps(:)
+    real(wp), intent(out) :: speed(:), time(:)
+    real(wp) :: state(2), k(2, 4), step, t, previous(2), fraction, drag
+    integer :: next
+    drag = 6.0_wp * pi * density * viscosity * radius
+    state = [start_gap, 0.0_wp]   ! gap, U
+    t = 0
+    next = 1
+    do while (next <= size(gaps))
+      step = 0.02_wp * inertia / (drag * brenner_squeeze_coefficient(state(1) / radius))
+      previous = state
+      k(:, 1) = rate(state)
+      k(:, 2) = rate(state + 0.5_wp * step * k(:, 1))
+      k(:, 3) = rate(state + 0.5_wp * step * k(:, 2))
+      k(:, 4) = rate(state + step * k(:, 3))
+      state = state + step / 6.0_wp * (k(:, 1) + 2.0_wp * k(:, 2) + 2.0_wp * k(:, 3) + k(:, 4))
+      t = t + step
+      do while (next <= size(gaps))
+        if (state(1) > gaps(next)) exit
+        ! Linear within the step (its gap change is a small fraction of the gap).
+        fraction = (previous(1) - gaps(next)) / (previous(1) - state(1))
+        speed(next) = previous(2) + fraction * (state(2) - previous(2))
+        time(next) = t - step + fraction * step
+        next = next + 1
+      end do
+    end do
+
+  contains
+
+    function rate(y) result(dydt)
+      real(wp), intent(in) :: y(2)
+      real(wp) :: dydt(2)
+      dydt = [-2.0_wp * y(2), (push - drag * brenner_squeeze_coefficient(y(1) / radius) * y(2)) / inertia]
+    end function rate
+  end subroutine approach_reference
 end module squeeze_case

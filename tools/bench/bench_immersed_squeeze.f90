@@ -7,8 +7,8 @@
 !> gives the error of its increase from the first (widest) gap of the list, F(h) - F(h_1) against
 !> the same difference of Brenner's force: the periodic box changes the force by an amount that
 !> hardly depends on h, and the increase is what the sub-grid model must add below the hand-over
-!> (R(h) - R(h_out), src/particles/lubrication.f90). The last two error columns are those of the
-!> total force with the sub-grid model on, F(h) + (R(h) - R(h_out)) 2U, for h_out = 1 and 2 cells.
+!> (R(h) - R(h_out), src/particles/lubrication.f90). The last three error columns are those of the
+!> total force with the sub-grid model on, F(h) + (R(h) - R(h_out)) 2U, for h_out = 0.5, 1 and 2 cells.
 !> Optional arguments: D/dx, box width n_y (cells), then the gaps in cells, the widest first (default
 !> 8, 32, and 8 6 4 3 2 1.5 1 0.75 0.5 0.25 0.1 0.02 0.004).
 program bench_immersed_squeeze
@@ -23,7 +23,7 @@ program bench_immersed_squeeze
   character(len=32) :: argument
   integer :: g, count
   character(len=*), parameter :: row_format = &
-      '(a,f4.1,a,i0,a,i0,a,f6.3,a,f7.4,a,es11.4,a,es11.4,a,f7.2,a,f7.2,a,f7.2,a,f7.2,a,i0,a,a,a,f7.1,a)'
+      '(a,f4.1,a,i0,a,i0,a,f6.3,a,f7.4,a,es11.4,a,es11.4,a,f7.2,a,f7.2,a,f7.2,a,f7.2,a,f7.2,a,i0,a,a,a,f7.1,a)'
 
   call parallel_start()
   count = command_argument_count()
@@ -47,8 +47,9 @@ program bench_immersed_squeeze
   end if
   if (is_root()) then
     print '(a)', '| D/dx | box (cells) | h/dx | h/a | F resolved (N) | F Brenner (N) | error | ' // &
-        'error of F(h) - F(widest) | total error, h_out = 1 cell | total error, h_out = 2 cells | steps | steady | wall s |'
-    print '(a)', '|---|---|---|---|---|---|---|---|---|---|---|---|---|'
+        'error of F(h) - F(widest) | total error, h_out = 0.5 cell | total error, h_out = 1 cell | ' // &
+        'total error, h_out = 2 cells | steps | steady | wall s |'
+    print '(a)', '|---|---|---|---|---|---|---|---|---|---|---|---|---|---|'
   end if
   do g = 1, size(gaps)
     case%gap_cells = gaps(g)
@@ -56,7 +57,8 @@ program bench_immersed_squeeze
     if (g == 1) widest = result
     if (is_root()) print row_format, '| ', case%diameter_cells, ' | ', 2 * case%width_cells, 'x', case%width_cells, &
         '^2 | ', case%gap_cells, ' | ', result%gap_over_radius, ' | ', result%force, ' | ', result%reference, ' | ', &
-        100 * result%error, '% | ', 100 * increase_error(), '% | ', 100 * total_error(1.0_wp), '% | ', &
+        100 * result%error, '% | ', 100 * increase_error(), '% | ', 100 * total_error(0.5_wp), '% | ', &
+        100 * total_error(1.0_wp), '% | ', &
         100 * total_error(2.0_wp), '% | ', result%steps, ' | ', &
         trim(merge('yes', 'no ', result%steady)), ' | ', result%wall_seconds, ' |'
   end do
