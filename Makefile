@@ -169,7 +169,7 @@ bench: deps ## run the benchmarks (results for docs/performance.md)
 validate: deps ## run the immersed-boundary validation ladder (the table in docs/validation.md)
 	@$(MAKE) --no-print-directory build $(BUILD)/bench/bench_immersed_ladder $(BUILD)/bench/bench_immersed_surface \
 	  $(BUILD)/bench/bench_immersed_moving $(BUILD)/bench/bench_immersed_cn $(BUILD)/bench/bench_immersed_squeeze \
-	  $(BUILD)/bench/bench_free_particles $(BUILD)/bench/bench_free_squeeze
+	  $(BUILD)/bench/bench_free_particles $(BUILD)/bench/bench_free_squeeze $(BUILD)/bench/bench_free_cn
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_immersed_ladder
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_immersed_surface
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_immersed_moving
@@ -178,6 +178,7 @@ validate: deps ## run the immersed-boundary validation ladder (the table in docs
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_immersed_squeeze 12 48 12 4 3 2 1.5 1 0.75 0.5
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_free_particles
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_free_squeeze
+	$(MPIRUN) -np 1 $(BUILD)/bench/bench_free_cn
 	AGGLO=$(abspath $(BUILD))/agglo EXTREMES=long bash tests/mpi/test_resolved_extremes.sh
 
 clean: ## remove the build directory
