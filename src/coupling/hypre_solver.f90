@@ -17,6 +17,7 @@ module hypre_solver
   use agglo_kinds, only: wp
   use parallel_env, only: world
   use error_handling, only: fatal
+  use timer_registry, only: timer_tic, timer_toc
   use hypre_bindings, only: hypre_parcsr, hypre_error_conv, HYPRE_Init, HYPRE_ClearAllErrors, &
       HYPRE_IJMatrixSetObjectType, HYPRE_IJMatrixSetDiagOffdSizes, HYPRE_IJMatrixInitialize, &
       HYPRE_IJMatrixSetValues, HYPRE_IJMatrixAssemble, HYPRE_IJMatrixGetObject, HYPRE_IJMatrixDestroy, &
@@ -214,6 +215,8 @@ contains
           size(solution), ' entries, this rank owns ', size(solver%rhs_local)
       call fatal(trim(text), collective=.false.)
     end if
+    ! Every hypre solve of the run under one timer (the step's breakdown, docs/performance.md).
+    call timer_tic('hypre')
     solver%rhs_local = rhs
     solver%solution_local = solution
     select case (solver%config%method)
@@ -237,6 +240,7 @@ contains
     solver%set_up = .true.
     call require_ok(ierr, 'HYPRE_ParCSR'//trim(solver%config%method)//'Solve')
     solution = solver%solution_local
+    call timer_toc('hypre')
     status%iterations = int(iterations)
     status%relative_residual = real(residual, wp)
     status%tolerance = solver%config%tolerance

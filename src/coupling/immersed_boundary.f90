@@ -12,8 +12,10 @@
 !>     so the ghost rows form a coupled system, solved by Jacobi sweeps over the ghost list to a
 !>     tolerance. Jacobi (every new value from the previous sweep's values) rather than Gauss-Seidel
 !>     so that the result does not depend on the ranks' ordering: 1 and 2 ranks agree to round-off.
-!>     Stencil corners on another rank are read from copies of the neighbours' planes refreshed
-!>     before every sweep when any stencil reaches a ghost node of another rank, else once.
+!>     Stencil corners on another rank are read from copies of the neighbours' planes, exchanged
+!>     whole before the first sweep; when any stencil reaches a ghost node of another rank, only the
+!>     ghost values in those planes (the only values a sweep changes) travel before each further
+!>     sweep (ghost_traffic_t: the same copies as a whole exchange, at a fraction of the traffic).
 !>   - coupling 'explicit' (image point 'image', d_M = max(d_G, 1.5 h)): one evaluation of the row
 !>     (G's own weight, where the stencil still holds G, on the diagonal as above).
 !> - Loads by momentum balance (ibm-notes section 8.2): each imposition changes the momentum on the
@@ -56,6 +58,15 @@ module immersed_boundary
   type :: status_fields_t
     type(status_field_t) :: field(3)
   end type status_fields_t
+
+  !> The ghost values one rank's sweeps send to one neighbour and receive from it (one direction of
+  !> the plane exchange; plan_ghost_traffic): after the first whole exchange of the planes, a sweep
+  !> changes only ghost values, so only those of the planes the neighbour copies need to travel.
+  type :: ghost_traffic_t
+    integer, allocatable :: outgoing(:, :)       !< (2, m): component, index in its ghost list
+    integer, allocatable :: incoming(:, :)       !< (4, m): component, i, j, k in below | above
+    real(wp), allocatable :: send_values(:), receive_values(:)
+  end type ghost_traffic_t
 
   !> The rigid velocity and the load bookkeeping of one node, for a solver that imposes the body rows itself
   public :: rigid_velocity, account
@@ -120,6 +131,7 @@ module immersed_boundary
     real(wp), allocatable :: inertia_change(:, :)
     integer :: halo_planes = 0           !< planes beyond the slab that the stencils reach (every component)
     logical :: remote_ghosts = .false.   !< some stencil (on some rank) holds a ghost node of another rank
+    logical :: stencils_leave_slab = .true.   !< some stencil (on some rank) reaches beyond its rank's slab
     real(wp), allocatable :: below(:, :, :, :), above(:, :, :, :)   !< copies of the neighbours' planes, per component
     type(lever_arms_t) :: arms(3)        !< per component, for the current placement
     real(wp), allocatable :: arm_centres(:, :)   !< (3, n) the centres the lever arms were computed for
@@ -188,6 +200,7 @@ contains
     end do
     call MPI_Allreduce(MPI_IN_PLACE, planes, 1, MPI_INTEGER, MPI_MAX, world)
     call MPI_Allreduce(MPI_IN_PLACE, remote, 1, MPI_LOGICAL, MPI_LOR, world)
+    ibm%stencils_leave_slab = planes > 0
     planes = max(planes, 1)
     if (planes > grid%nz_local) then
       write(text, '(a,i0,a,i0,a)') 'immersed boundary: the ghost stencils reach ', planes, &
@@ -551,6 +564,7 @@ contains
     real(wp), allocatable :: surface(:, :)  ! u_B of each ghost
     integer :: c, sweep, max_sweeps, n_max
     character(len=240) :: text
+    type(ghost_traffic_t) :: downward, upward   ! to the rank below (its above planes), to the rank above
 
     n_max = max(1, maxval([(ibm%geometry%component(c)%n_ghost, c = 1, 3)]))
     allocate(before(n_max, 3), surface(n_max, 3))
@@ -567,19 +581,33 @@ contains
     max_sweeps = 1
     if (ibm%settings%coupling == 'implicit') max_sweeps = ibm%settings%max_sweeps
     report%residual = huge(1.0_wp)
-    do sweep = 1, max_sweeps
-      if (sweep == 1 .or. ibm%remote_ghosts) then
-        call exchange_planes(ibm, grid, u, v, w)
-        report%exchanges = report%exchanges + 1
-      end if
-      limit = 0
-      call jacobi_sweep(ibm, 1, u, surface(:, 1), limit)
-      call jacobi_sweep(ibm, 2, v, surface(:, 2), limit)
-      call jacobi_sweep(ibm, 3, w, surface(:, 3), limit)
-      report%sweeps = sweep
+    ! The neighbours' planes are read only by stencils that leave the slab (none: nothing to copy).
+    if (ibm%stencils_leave_slab .or. ibm%remote_ghosts) then
+      call exchange_planes(ibm, grid, u, v, w)
+      report%exchanges = report%exchanges + 1
+    end if
+    sweep = 0
+    if (ibm%remote_ghosts .or. max_sweeps == 1) then
+      ! Coupled across ranks: every sweep waits for the neighbours' ghost values and the global residual.
+      if (ibm%remote_ghosts .and. max_sweeps > 1) call plan_ghost_traffic(ibm, grid, downward, upward)
+      call lockstep_sweeps()
+    else
+      ! No stencil reads another rank's ghost nodes, so each rank's ghost rows are a system of their
+      ! own: a rank sweeps until its own residual meets the tolerance, the ranks then agree on the
+      ! largest count, those that stopped earlier catch up, and the global residual is checked once.
+      ! The result is that of lockstep sweeps with a global residual every sweep (the same sweep
+      ! count and values), with one reduction where lockstep takes one per sweep.
+      do while (sweep < max_sweeps)
+        call sweep_once()
+        if (limit / report%velocity_scale <= ibm%settings%tolerance) exit
+      end do
+      report%sweeps = global_max_integer(sweep)
+      do while (sweep < report%sweeps)
+        call sweep_once()
+      end do
       report%residual = global_max(limit) / report%velocity_scale
-      if (report%residual <= ibm%settings%tolerance) exit
-    end do
+      if (.not. (report%residual <= ibm%settings%tolerance)) call lockstep_sweeps()
+    end if
     if (ibm%settings%coupling == 'implicit' .and. .not. (report%residual <= ibm%settings%tolerance)) then
       write(text, '(a,i0,a,es10.3,a,es10.3,a)') 'immersed boundary: the ghost rows did not converge in ', &
           max_sweeps, ' sweeps (residual ', report%residual, ' > tolerance ', ibm%settings%tolerance, &
@@ -592,7 +620,38 @@ contains
     call account_ghosts(ibm, grid, 3, w, before(:, 3), change(3))
     report%largest_change = global_max(maxval(change)) / report%velocity_scale
     call exchange_slab_halos(grid%slab, u, v, w)
+  contains
+
+    !> One Jacobi sweep of the three components' ghost rows on this rank (limit: the largest change).
+    subroutine sweep_once()
+      limit = 0
+      call jacobi_sweep(ibm, 1, u, surface(:, 1), limit)
+      call jacobi_sweep(ibm, 2, v, surface(:, 2), limit)
+      call jacobi_sweep(ibm, 3, w, surface(:, 3), limit)
+      sweep = sweep + 1
+    end subroutine sweep_once
+
+    !> Sweeps on every rank together until the global residual meets the tolerance or max_sweeps.
+    subroutine lockstep_sweeps()
+      do while (sweep < max_sweeps)
+        if (sweep > 0 .and. ibm%remote_ghosts) then
+          call exchange_ghost_values(ibm, grid, downward, upward, u, v, w)
+          report%exchanges = report%exchanges + 1
+        end if
+        call sweep_once()
+        report%sweeps = sweep
+        report%residual = global_max(limit) / report%velocity_scale
+        if (report%residual <= ibm%settings%tolerance) exit
+      end do
+    end subroutine lockstep_sweeps
   end subroutine ibm_impose
+
+  !> The largest of an integer over the ranks (collective).
+  integer function global_max_integer(local) result(largest)
+    integer, intent(in) :: local
+    largest = local
+    call MPI_Allreduce(MPI_IN_PLACE, largest, 1, MPI_INTEGER, MPI_MAX, world)
+  end function global_max_integer
 
   !> Rigid-body velocity component `component` of body n at lever arm r: (U + Omega x r)_c (m/s).
   pure real(wp) function rigid_velocity(ibm, n, component, r) result(value)
@@ -787,6 +846,108 @@ contains
                         MPI_STATUS_IGNORE)
     end subroutine exchange_component
   end subroutine exchange_planes
+
+  !> Which ghost values travel in each direction between sweeps (collective with the neighbours):
+  !> this rank's ghosts in its lowest halo_planes planes go to the rank below (its `above` copies),
+  !> those in its highest planes to the rank above (its `below` copies); each rank sends the other
+  !> where the values go (k as the receiver's plane index: the receiver's nz_local added for `above`).
+  subroutine plan_ghost_traffic(ibm, grid, downward, upward)
+    type(immersed_boundary_t), intent(in) :: ibm
+    type(fluid_grid_t), intent(in) :: grid
+    type(ghost_traffic_t), intent(out) :: downward, upward
+    integer :: c, g, k, h, nzl, n_down, n_up, counts(2)
+    integer, allocatable :: where_down(:, :), where_up(:, :)
+    h = ibm%halo_planes
+    nzl = grid%nz_local
+    n_down = 0
+    n_up = 0
+    do c = 1, 3
+      associate (nodes => ibm%geometry%component(c))
+        n_down = n_down + count([(nodes%ghost(g)%node(3) <= h, g = 1, nodes%n_ghost)])
+        n_up = n_up + count([(nodes%ghost(g)%node(3) > nzl - h, g = 1, nodes%n_ghost)])
+      end associate
+    end do
+    allocate(downward%outgoing(2, n_down), upward%outgoing(2, n_up), where_down(4, n_down), where_up(4, n_up))
+    n_down = 0
+    n_up = 0
+    do c = 1, 3
+      associate (nodes => ibm%geometry%component(c))
+        do g = 1, nodes%n_ghost
+          k = nodes%ghost(g)%node(3)
+          if (k <= h) then
+            n_down = n_down + 1
+            downward%outgoing(:, n_down) = [c, g]
+            where_down(:, n_down) = [c, nodes%ghost(g)%node(1:2), k]          ! + the receiver's nz_local
+          end if
+          if (k > nzl - h) then
+            n_up = n_up + 1
+            upward%outgoing(:, n_up) = [c, g]
+            where_up(:, n_up) = [c, nodes%ghost(g)%node(1:2), k - nzl]       ! in 1 - h .. 0
+          end if
+        end do
+      end associate
+    end do
+    ! Downward values arrive from the rank above and upward ones from the rank below.
+    call MPI_Sendrecv([n_down], 1, MPI_INTEGER, grid%slab%rank_below, 430, counts(1), 1, MPI_INTEGER, &
+                      grid%slab%rank_above, 430, world, MPI_STATUS_IGNORE)
+    call MPI_Sendrecv([n_up], 1, MPI_INTEGER, grid%slab%rank_above, 431, counts(2), 1, MPI_INTEGER, &
+                      grid%slab%rank_below, 431, world, MPI_STATUS_IGNORE)
+    allocate(downward%incoming(4, counts(1)), upward%incoming(4, counts(2)))
+    call MPI_Sendrecv(where_down, 4 * n_down, MPI_INTEGER, grid%slab%rank_below, 432, downward%incoming, &
+                      4 * counts(1), MPI_INTEGER, grid%slab%rank_above, 432, world, MPI_STATUS_IGNORE)
+    call MPI_Sendrecv(where_up, 4 * n_up, MPI_INTEGER, grid%slab%rank_above, 433, upward%incoming, &
+                      4 * counts(2), MPI_INTEGER, grid%slab%rank_below, 433, world, MPI_STATUS_IGNORE)
+    downward%incoming(4, :) = downward%incoming(4, :) + nzl
+    allocate(downward%send_values(n_down), upward%send_values(n_up), downward%receive_values(counts(1)), &
+             upward%receive_values(counts(2)))
+  end subroutine plan_ghost_traffic
+
+  !> Refresh the neighbours' plane copies with the current ghost values (collective with the
+  !> neighbours): what exchange_planes would bring after a sweep, which changed only ghost values.
+  subroutine exchange_ghost_values(ibm, grid, downward, upward, u, v, w)
+    type(immersed_boundary_t), intent(inout) :: ibm
+    type(fluid_grid_t), intent(in) :: grid
+    type(ghost_traffic_t), intent(inout) :: downward, upward
+    real(wp), intent(in) :: u(0:, 0:, 0:), v(0:, 0:, 0:), w(0:, 0:, 0:)
+    integer :: m
+    call pack_values(downward)
+    call pack_values(upward)
+    call MPI_Sendrecv(downward%send_values, size(downward%send_values), mpi_wp, grid%slab%rank_below, 434, &
+                      downward%receive_values, size(downward%receive_values), mpi_wp, grid%slab%rank_above, 434, &
+                      world, MPI_STATUS_IGNORE)
+    call MPI_Sendrecv(upward%send_values, size(upward%send_values), mpi_wp, grid%slab%rank_above, 435, &
+                      upward%receive_values, size(upward%receive_values), mpi_wp, grid%slab%rank_below, 435, &
+                      world, MPI_STATUS_IGNORE)
+    do m = 1, size(downward%receive_values)
+      associate (at => downward%incoming(:, m))
+        ibm%above(at(2), at(3), at(4), at(1)) = downward%receive_values(m)
+      end associate
+    end do
+    do m = 1, size(upward%receive_values)
+      associate (at => upward%incoming(:, m))
+        ibm%below(at(2), at(3), at(4), at(1)) = upward%receive_values(m)
+      end associate
+    end do
+  contains
+    subroutine pack_values(traffic)
+      type(ghost_traffic_t), intent(inout) :: traffic
+      integer :: n
+      do n = 1, size(traffic%send_values)
+        associate (c => traffic%outgoing(1, n), g => traffic%outgoing(2, n))
+          associate (node => ibm%geometry%component(c)%ghost(g)%node)
+            select case (c)
+            case (1)
+              traffic%send_values(n) = u(node(1), node(2), node(3))
+            case (2)
+              traffic%send_values(n) = v(node(1), node(2), node(3))
+            case default
+              traffic%send_values(n) = w(node(1), node(2), node(3))
+            end select
+          end associate
+        end associate
+      end do
+    end subroutine pack_values
+  end subroutine exchange_ghost_values
 
   pure logical function any_remote_ghost(nodes)
     type(component_nodes_t), intent(in) :: nodes

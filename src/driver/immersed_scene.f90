@@ -66,7 +66,9 @@ module immersed_scene
     type(immersed_predictor_t) :: predictor    !< the Crank-Nicolson predictor with the body rows
     logical :: guess_from_velocity = .true.    !< its Krylov solve starts from u^n (else from b)
     real(wp) :: divergence = 0                 !< 1/s, largest |div u| after the re-imposition (cut cells)
-    integer :: timer = 0
+    !> Timers: the whole immersed-boundary share of a step, and its parts (classification of the
+    !> grid, the imposition sweeps, the loads), which nest inside it.
+    integer :: timer = 0, timer_classify = 0, timer_impose = 0, timer_loads = 0
     integer :: loads_unit = 0
     logical :: loads_opened = .false.              !< this rank writes bodies_loads.dat
   end type immersed_scene_t
@@ -133,6 +135,9 @@ contains
       end if
     end if
     scene%timer = timer_register('immersed boundary')
+    scene%timer_classify = timer_register('  IB classification')
+    scene%timer_impose = timer_register('  IB imposition')
+    scene%timer_loads = timer_register('  IB loads')
   end subroutine immersed_scene_create
 
   !> One fluid step of length dt with the immersed bodies (collective). fluid_force_*: a body force
@@ -151,11 +156,13 @@ contains
     type(immersed_body_t), intent(in), optional :: bodies(:)
     real(wp), intent(in), optional :: velocity(:, :), angular_velocity(:, :)
     call timer_tic(scene%timer)
+    call timer_tic(scene%timer_classify)
     if (present(bodies)) then
       call ibm_set_bodies(scene%ibm, solver%grid, bodies, velocity, angular_velocity, classify=.true.)
     else
       call place_bodies(scene, solver, solver%time + dt, classify=scene%moving)
     end if
+    call timer_toc(scene%timer_classify)
     if (present(fluid_force_u)) then
       associate (drive => scene%driving_force / solver%density, nodes => scene%ibm%geometry%component)
         scene%force_u = drive(1) + merge(fluid_force_u, 0.0_wp, nodes(1)%status == node_fluid)
@@ -178,14 +185,19 @@ contains
     else
       call fluid_predict(solver, dt, force_u=scene%force_u, force_v=scene%force_v, force_w=scene%force_w)
       call timer_tic(scene%timer)
+      call timer_tic(scene%timer_impose)
       call ibm_impose(scene%ibm, solver%grid, solver%explicit_old_u, solver%explicit_old_v, solver%explicit_old_w, &
                       scene%predicted)
+      call timer_toc(scene%timer_impose)
       call timer_toc(scene%timer)
     end if
     call fluid_project(solver)
     call timer_tic(scene%timer)
+    call timer_tic(scene%timer_impose)
     call ibm_impose(scene%ibm, solver%grid, solver%u, solver%v, solver%w, scene%projected)
     scene%divergence = cell_divergence_max(solver%grid, solver%u, solver%v, solver%w)
+    call timer_toc(scene%timer_impose)
+    call timer_tic(scene%timer_loads)
     call ibm_step_loads(scene%ibm, solver%grid, solver%u, solver%v, solver%w, dt, scene%momentum_force, &
                         scene%momentum_torque)
     ! The face sum with u^{n+1} and p^{n+1/2}, the pressure fluid_project left (immersed_surface_loads).
@@ -201,6 +213,7 @@ contains
       scene%force = scene%momentum_force
       scene%torque = scene%momentum_torque
     end if
+    call timer_toc(scene%timer_loads)
     if (scene%extend_pressure) call ibm_extend_pressure(scene%ibm, solver%grid, solver%pressure)
     call timer_toc(scene%timer)
     call fluid_finish_step(solver)

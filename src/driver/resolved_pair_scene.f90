@@ -21,7 +21,10 @@
 !> Outputs: the pair scenes' particles.h5 and summary.json (fluid 'resolved_point' or
 !> 'resolved_resolved'), whose samples
 !> carry the hydrodynamic force and torque (force_hydrodynamic, torque_hydrodynamic), and the
-!> resolved scene's fluid_statistics.dat, fields and flow statistics. Checkpoints (every &output
+!> resolved scene's fluid_statistics.dat, fields and flow statistics; with particle_coupling =
+!> 'resolved' also bodies_loads.dat, the immersed boundary's own force and torque on each body after
+!> every fluid step (momentum balance or face sum, before the added-mass stabilisation; the columns
+!> of the prescribed scenes, docs/outputs.md). Checkpoints (every &output
 !> checkpoint_interval fluid steps and at the end): one transaction with the groups fluid, forcing,
 !> particles, pair_scene and the provider's own (resolved_hydrodynamics), so &run restart continues
 !> bit for bit.
@@ -59,6 +62,7 @@ module resolved_pair_scene
   use pair_hydrodynamics, only: pair_hydrodynamics_t
   use point_hydrodynamics, only: point_hydrodynamics_t, point_hydrodynamics_create
   use resolved_hydrodynamics, only: resolved_hydrodynamics_t, resolved_hydrodynamics_create
+  use immersed_scene, only: loads_open, loads_write, loads_close
   use immersed_boundary, only: ibm_settings_t
   use immersed_predictor, only: default_predictor_config
   use point_particle_coupling, only: local_rotation, sample_velocity
@@ -124,6 +128,10 @@ contains
     if (.not. solver%crank_nicolson) viscous_limit = explicit_viscous_limit(solver%grid%dx, solver%grid%dy, &
                                                                             solver%grid%dz, solver%viscosity)
     call statistics_open(run_file('fluid_statistics.dat'), append=cfg%run%restart, last_step=solver%step)
+    select type (hydrodynamics)
+    type is (resolved_hydrodynamics_t)
+      call loads_open(hydrodynamics%scene, run_file('bodies_loads.dat'), append=cfg%run%restart, last_step=solver%step)
+    end select
     next_field_time = next_output_time(solver%time, cfg%output%field_interval, cfg%run%end_time)
     call log_line('resolved pair scene: particle coupling '''//trim(cfg%scene%particle_coupling)//''', '// &
         'particle step = fluid step / '//int_text(substeps)//'; particles.h5, summary.json')
@@ -163,6 +171,10 @@ contains
       end if
       if (flow_output_due(flow, solver%step)) call flow_output_record(flow, solver, &
                                                                      forcing_driver_power_input(forcing, solver))
+      select type (hydrodynamics)
+      type is (resolved_hydrodynamics_t)
+        call loads_write(hydrodynamics%scene, solver%step, solver%time)
+      end select
 
       call timer_tic(timer_particles)
       call felt_loads(0.0_wp)
@@ -205,6 +217,10 @@ contains
     if (solver%step > first_step) call checkpoint(last=.true.)
     call particle_output_close(output)
     call statistics_close()
+    select type (hydrodynamics)
+    type is (resolved_hydrodynamics_t)
+      call loads_close(hydrodynamics%scene)
+    end select
     call forcing_driver_finish(forcing, solver)
     call flow_output_finish(flow)
     call finish_summary(cfg, rules, system, loop, summary)
