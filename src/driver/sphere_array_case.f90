@@ -26,6 +26,10 @@
 !> reclassification; the rigid velocity Omega x r is imposed on it): the torque is the
 !> instantaneous Stokes resistance of that orientation (Omega r = 1e-7 m/s would turn the body by
 !> only about 1e-3 rad over a run anyway).
+!>
+!> box_cells = (nx, ny, nz) makes the box non-cubic at the spacing dx = 1 mm / cells (the tight
+!> boxes of the spheroid symmetry check: the body's torque while translating along a principal axis
+!> vanishes by symmetry in any periodic lattice of it); the drive's force is then f Lx Ly Lz.
 module sphere_array_case
   use agglo_kinds, only: wp
   use physical_constants, only: pi

@@ -13,6 +13,11 @@
 !>   against 8 pi mu a^3 Omega (Stokes).
 !> - sweeps: Jacobi sweeps of the implicit ghost rows to 1e-12 for needles and disks (aspect 5) at
 !>   random orientations and positions, 64^3 to 256^3 (immersed_sweep_survey).
+!> - spheroids[:thin cells]: needle and disk (aspect 5) translating and rotating, two boxes, against
+!>   Oberbeck/Perrin (rung 6); spheroid-transfer[:thin cells[:shape[:motion]]]: the box correction
+!>   fitted on four boxes at 4.4 cells thin and carried to one box at the finer grid;
+!>   spheroid-symmetry[:thin cells[:shape]]: torque of a translating needle and disk at the paper's
+!>   thin-dimension resolution in tight boxes; spheroid:shape:motion:thin:box:scheme:nu dt/dx^2: one run.
 program bench_immersed_ladder
   use agglo_kinds, only: wp
   use parallel_env, only: parallel_start, parallel_stop, is_root
@@ -33,6 +38,8 @@ program bench_immersed_ladder
     call run_section('sweeps')
     call run_section('spheroids')
     call run_section('spheroids:6')
+    call run_section('spheroid-symmetry')
+    call run_section('spheroid-transfer')
   else
     do a = 1, command_argument_count()
       call get_command_argument(a, argument)
