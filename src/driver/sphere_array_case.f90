@@ -117,6 +117,8 @@ contains
 
     t0 = wall_time()
     counts = case%cells
+    if (any(case%box_cells > 0) .and. .not. all(case%box_cells > 0)) &
+      error stop 'sphere_array_case: box_cells needs three positive counts (or all 0 for a cubic box)'
     if (all(case%box_cells > 0)) counts = case%box_cells
     lengths = counts * (box / case%cells)
     grid_cfg = grid_config_t(nx=counts(1), ny=counts(2), nz=counts(3), length_x=lengths(1), length_y=lengths(2), &
