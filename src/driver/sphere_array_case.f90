@@ -26,6 +26,10 @@
 !> reclassification; the rigid velocity Omega x r is imposed on it): the torque is the
 !> instantaneous Stokes resistance of that orientation (Omega r = 1e-7 m/s would turn the body by
 !> only about 1e-3 rad over a run anyway).
+!>
+!> box_cells = (nx, ny, nz) makes the box non-cubic at the spacing dx = 1 mm / cells (the tight
+!> boxes of the spheroid symmetry check: the body's torque while translating along a principal axis
+!> vanishes by symmetry in any periodic lattice of it); the drive's force is then f Lx Ly Lz.
 module sphere_array_case
   use agglo_kinds, only: wp
   use physical_constants, only: pi
@@ -42,10 +46,11 @@ module sphere_array_case
   use immersed_scene, only: prescribed_motion_t, immersed_scene_t, immersed_scene_create, immersed_step
   implicit none
   private
-  public :: sphere_array_case_t, sphere_array_result_t, run_sphere_array
+  public :: sphere_array_case_t, sphere_array_result_t, run_sphere_array, fit_power_series
 
   type :: sphere_array_case_t
-    integer :: cells = 13                        !< cells per box edge
+    integer :: cells = 13                        !< cells per box edge (dx = 1 mm / cells)
+    integer :: box_cells(3) = 0                  !< a non-cubic box of these cells at that dx (0: cells^3)
     real(wp) :: volume_fraction = 0.125_wp       !< phi = V_sphere / L^3
     character(len=16) :: coupling = 'implicit'   !< immersed_boundary coupling
     real(wp) :: viscous_number = 0.06_wp         !< nu dt / dx^2 (AB2 explicit diffusion: below 1/12)
@@ -72,12 +77,12 @@ module sphere_array_case
     real(wp) :: diameter_cells = 0         !< D / dx
     real(wp) :: superficial_velocity = 0   !< m/s
     real(wp) :: force(3) = 0               !< N, momentum-balance load of the last step
-    real(wp) :: drive(3) = 0               !< N, f L^3
+    real(wp) :: drive(3) = 0               !< N, f L^3 (f Lx Ly Lz in a non-cubic box)
     real(wp) :: torque(3) = 0              !< N m, momentum-balance torque of the last step
     real(wp) :: surface_force(3) = 0       !< N, face-sum load of the last step (immersed_surface_loads)
     real(wp) :: surface_torque(3) = 0      !< N m, face-sum torque of the last step
     real(wp) :: stokes_torque = 0          !< N m, 8 pi mu a^3 Omega (rotating case)
-    real(wp) :: radius_over_box = 0        !< a / L (r / L for a spheroid, r volume-equivalent)
+    real(wp) :: radius_over_box = 0        !< a / L (r / L for a spheroid, r volume-equivalent; L = cells dx)
     real(wp) :: radius = 0                 !< m, a (r)
     real(wp) :: angular_speed = 0          !< rad/s, |Omega| (rotating)
     real(wp) :: dynamic_viscosity = 0      !< Pa s
@@ -107,11 +112,17 @@ contains
     type(prescribed_motion_t) :: motion(1)
     type(ibm_settings_t) :: settings
     real(wp) :: radius, dt, u_old, u_new, t0, sweeps_total, drive_x, axis(3), turn(3)
-    real(wp) :: samples(3), estimate, previous_estimate, scale
-    integer :: step
+    real(wp) :: samples(3), estimate, previous_estimate, scale, lengths(3), force_drive
+    integer :: step, counts(3)
 
     t0 = wall_time()
-    grid_cfg = grid_config_t(nx=case%cells, ny=case%cells, nz=case%cells, length_x=box, length_y=box, length_z=box)
+    counts = case%cells
+    if (any(case%box_cells > 0) .and. .not. all(case%box_cells > 0)) &
+      error stop 'sphere_array_case: box_cells needs three positive counts (or all 0 for a cubic box)'
+    if (all(case%box_cells > 0)) counts = case%box_cells
+    lengths = counts * (box / case%cells)
+    grid_cfg = grid_config_t(nx=counts(1), ny=counts(2), nz=counts(3), length_x=lengths(1), length_y=lengths(2), &
+                             length_z=lengths(3))
     fluid_cfg%density = density
     fluid_cfg%viscosity = viscosity
     fluid_cfg%viscous_scheme = case%viscous_scheme
@@ -127,7 +138,7 @@ contains
     turn = [0.0_wp, -axis(3), axis(2)]
     if (norm2(turn) > 1.0e-12_wp) motion(1)%orientation = quaternion_from_axis_angle(turn / norm2(turn), &
                                                                                   acos(max(-1.0_wp, min(1.0_wp, axis(1)))))
-    motion(1)%centre = 0.5_wp * box + case%offset_cells * solver%grid%dx
+    motion(1)%centre = 0.5_wp * lengths + case%offset_cells * solver%grid%dx
     if (case%mesh_level >= 0) call build_icosphere_mesh(motion(1)%shape, case%mesh_level, motion(1)%mesh)
     settings%coupling = case%coupling
     settings%tolerance = case%ghost_tolerance
@@ -190,8 +201,9 @@ contains
     result%radius_over_box = radius / box
     result%superficial_velocity = u_new
     result%diameter_cells = 2.0_wp * radius / solver%grid%dx
-    result%drive = [drive * box**3, 0.0_wp, 0.0_wp]
-    result%drag_coefficient = drive * box**3 / (6.0_wp * pi * density * viscosity * radius * u_new)
+    force_drive = drive * product(lengths)
+    result%drive = [force_drive, 0.0_wp, 0.0_wp]
+    result%drag_coefficient = force_drive / (6.0_wp * pi * density * viscosity * radius * u_new)
     result%force = scale * scene%force(:, 1)
     result%surface_force = scale * scene%surface_force(:, 1)
     result%surface_torque = scale * scene%surface_torque(:, 1)
@@ -200,4 +212,42 @@ contains
     result%divergence = scene%divergence
     result%wall_seconds = wall_time() - t0
   end subroutine run_sphere_array
+
+  !> Least-squares fit of y = sum_k coefficients(k) x**powers(k) through the samples (x, y), at least
+  !> as many as powers: the box-size series of a periodic array's resistance in r/L (docs/validation.md,
+  !> rung 6). Normal equations with the columns scaled by their largest value, Gaussian elimination
+  !> with partial pivoting.
+  subroutine fit_power_series(x, y, powers, coefficients)
+    real(wp), intent(in) :: x(:), y(:), powers(:)
+    real(wp), intent(out) :: coefficients(:)
+    real(wp) :: design(size(x), size(powers)), normal(size(powers), size(powers)), rhs(size(powers))
+    real(wp) :: scales(size(powers)), row(size(powers)), factor, swap
+    integer :: k, j, pivot, n
+    n = size(powers)
+    if (size(x) < n .or. size(y) /= size(x) .or. size(coefficients) /= n) &
+      error stop 'fit_power_series: need size(x) = size(y) >= size(powers) = size(coefficients)'
+    do k = 1, n
+      design(:, k) = x**powers(k)
+      scales(k) = maxval(abs(design(:, k)))
+      if (scales(k) <= 0) scales(k) = 1
+      design(:, k) = design(:, k) / scales(k)
+    end do
+    normal = matmul(transpose(design), design)
+    rhs = matmul(transpose(design), y)
+    do k = 1, n
+      pivot = k - 1 + maxloc(abs(normal(k:, k)), dim=1)
+      row = normal(k, :); normal(k, :) = normal(pivot, :); normal(pivot, :) = row
+      swap = rhs(k); rhs(k) = rhs(pivot); rhs(pivot) = swap
+      if (abs(normal(k, k)) <= 0) error stop 'fit_power_series: singular (repeated x or too few distinct samples)'
+      do j = k + 1, n
+        factor = normal(j, k) / normal(k, k)
+        normal(j, k:) = normal(j, k:) - factor * normal(k, k:)
+        rhs(j) = rhs(j) - factor * rhs(k)
+      end do
+    end do
+    do k = n, 1, -1
+      coefficients(k) = (rhs(k) - dot_product(normal(k, k + 1:), coefficients(k + 1:))) / normal(k, k)
+    end do
+    coefficients = coefficients / scales
+  end subroutine fit_power_series
 end module sphere_array_case

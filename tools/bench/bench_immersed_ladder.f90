@@ -13,10 +13,15 @@
 !>   against 8 pi mu a^3 Omega (Stokes).
 !> - sweeps: Jacobi sweeps of the implicit ghost rows to 1e-12 for needles and disks (aspect 5) at
 !>   random orientations and positions, 64^3 to 256^3 (immersed_sweep_survey).
+!> - spheroids[:thin cells]: needle and disk (aspect 5) translating and rotating, two boxes, against
+!>   Oberbeck/Perrin (rung 6); spheroid-transfer[:thin cells[:shape[:motion]]]: the box correction
+!>   fitted on four boxes at 4.4 cells thin and carried to one box at the finer grid;
+!>   spheroid-symmetry[:thin cells[:shape]]: torque of a translating needle and disk at the paper's
+!>   thin-dimension resolution in tight boxes; spheroid:shape:motion:thin:box:scheme:nu dt/dx^2: one run.
 program bench_immersed_ladder
   use agglo_kinds, only: wp
   use parallel_env, only: parallel_start, parallel_stop, is_root
-  use sphere_array_case, only: sphere_array_case_t, sphere_array_result_t, run_sphere_array
+  use sphere_array_case, only: sphere_array_case_t, sphere_array_result_t, run_sphere_array, fit_power_series
   use immersed_sweep_survey, only: sweep_survey_t, run_sweep_survey
   use stokes_resistance, only: spheroid_resistance_coefficients
   use spheroid, only: make_spheroid, spheroid_t
@@ -33,6 +38,8 @@ program bench_immersed_ladder
     call run_section('sweeps')
     call run_section('spheroids')
     call run_section('spheroids:6')
+    call run_section('spheroid-symmetry')
+    call run_section('spheroid-transfer')
   else
     do a = 1, command_argument_count()
       call get_command_argument(a, argument)
@@ -53,8 +60,9 @@ contains
     name = spec
     only_diameter = 0
     only_coupling = ''
-    if (first > 0) then
-      name = spec(:first - 1)
+    if (first > 0) name = spec(:first - 1)
+    if (first > 0 .and. trim(name) /= 'spheroid' .and. trim(name) /= 'spheroid-transfer' .and. &
+        trim(name) /= 'spheroid-symmetry') then
       second = index(spec(first + 1:), ':')
       if (second > 0) then
         only_coupling = spec(first + second + 1:)
@@ -83,10 +91,17 @@ contains
     case ('spheroids')
       ! spheroids:T: thinnest dimension T cells (default 4.4), the boxes scaled with it.
       call spheroid_table(merge(4.4_wp, only_diameter, only_diameter <= 0), only_coupling)
+    case ('spheroid')
+      call spheroid_single(spec)
+    case ('spheroid-transfer')
+      call spheroid_transfer(spec)
+    case ('spheroid-symmetry')
+      call spheroid_symmetry(spec)
     case default
       if (is_root()) print '(a)', 'bench_immersed_ladder: unknown section '''//trim(spec)// &
           '''; allowed: arrays, dilute, rotating, sweeps, spheroids (each optionally :D/dx:coupling; ' // &
-          'for spheroids :thin cells:coupling)'
+          'for spheroids :thin cells:coupling), spheroid:shape:motion:thin cells:box cells:scheme:nu dt/dx^2, ' // &
+          'spheroid-transfer[:thin cells[:shape[:motion]]], spheroid-symmetry[:thin cells[:shape]]'
       error stop 1
     end select
   end subroutine run_section
@@ -227,7 +242,7 @@ contains
     type(sphere_array_case_t) :: case
     type(sphere_array_result_t) :: result
     type(spheroid_t) :: unit_shape
-    real(wp) :: reference(4), x(2), y(2), expected, measured, extrapolated, cubic, torque_ratio, r
+    real(wp) :: reference(4), x(2), y(2), expected, measured, extrapolated, cubic, torque_ratio
     integer :: s, m, b, c
     boxes = nint([32.0_wp, 40.0_wp] * thin_cells / 4.4_wp)
     if (is_root()) then
@@ -243,33 +258,13 @@ contains
         do m = 1, size(motions)
           expected = reference(m)
           do b = 1, size(boxes)
-            case = sphere_array_case_t()
+            case = spheroid_case(shapes(s), m, thin_cells, boxes(b), 'explicit', 0.06_wp)
             case%coupling = couplings(c)
-            case%shape = shapes(s)
-            case%cells = boxes(b)
-            case%radius_cells = thin_cells / (2.0_wp * min(unit_shape%a, unit_shape%b))
-            case%steady_tolerance = 1.0e-7_wp
-            case%aitken_window = 1000
-            case%max_steps = 60000
-            case%rotating = m >= 3
-            case%axis = [1.0_wp, 0.0_wp, 0.0_wp]
-            if (m == 2) case%axis = [0.0_wp, 1.0_wp, 0.0_wp]
-            case%rotation_axis = [1.0_wp, 0.0_wp, 0.0_wp]
-            if (m == 4) case%rotation_axis = [0.0_wp, 0.0_wp, 1.0_wp]
             call run_sphere_array(case, result)
-            r = result%radius
             x(b) = result%radius_over_box
-            torque_ratio = 0
-            if (m <= 2) then
-              measured = result%drive(1) / (6.0_wp * acos(-1.0_wp) * result%dynamic_viscosity * r * &
-                                            result%superficial_velocity)
-              torque_ratio = norm2(result%torque) / (result%drive(1) * r)
-              y(b) = 1.0_wp / measured
-            else
-              measured = -dot_product(result%torque, case%rotation_axis) / &
-                         (8.0_wp * acos(-1.0_wp) * result%dynamic_viscosity * r**3 * result%angular_speed)
-              y(b) = measured
-            end if
+            call spheroid_coefficient(result, m, case, measured, torque_ratio)
+            y(b) = measured
+            if (m <= 2) y(b) = 1.0_wp / measured
             if (is_root()) print '(a,a,a,a,a,a,a,i0,a,f5.2,a,f6.4,a,f7.4,a,f7.4,a,es8.1,a,i0,a,f6.1,a,a)', '| ', &
                 trim(shapes(s)), ' | ', trim(motions(m)), ' | ', trim(couplings(c)), ' | ', boxes(b), '^3 | ', &
                 case%radius_cells, ' | ', x(b), ' | ', measured, ' | ', expected, ' | ', torque_ratio, ' | ', &
@@ -299,4 +294,256 @@ contains
     end do
     if (is_root()) print '(a)', ''
   end subroutine spheroid_table
+
+  !> The spheroid case of the ladder: shape 'needle' or 'disk' (aspect 5), motion m (1 translate
+  !> along the axis, 2 across it, 3 rotate about it, 4 across it), thin_cells across the thinnest
+  !> dimension, a box of `cells`, the viscous scheme and nu dt/dx^2. The Aitken window (translation)
+  !> is 1000 steps at nu dt/dx^2 = 0.06, the same simulated time at other steps (at least 10).
+  type(sphere_array_case_t) function spheroid_case(shape, m, thin_cells, cells, scheme, number) result(case)
+    character(len=*), intent(in) :: shape, scheme
+    integer, intent(in) :: m, cells
+    real(wp), intent(in) :: thin_cells, number
+    type(spheroid_t) :: unit_shape
+    unit_shape = make_spheroid(trim(shape), 1.0_wp, 1.0_wp)
+    case = sphere_array_case_t()
+    case%coupling = 'implicit'
+    case%shape = shape
+    case%cells = cells
+    case%radius_cells = thin_cells / (2.0_wp * min(unit_shape%a, unit_shape%b))
+    case%viscous_scheme = scheme
+    case%viscous_number = number
+    case%steady_tolerance = 1.0e-7_wp
+    case%aitken_window = max(10, nint(1000 * 0.06_wp / number))
+    case%max_steps = 60000
+    case%rotating = m >= 3
+    case%axis = [1.0_wp, 0.0_wp, 0.0_wp]
+    if (m == 2) case%axis = [0.0_wp, 1.0_wp, 0.0_wp]
+    case%rotation_axis = [1.0_wp, 0.0_wp, 0.0_wp]
+    if (m == 4) case%rotation_axis = [0.0_wp, 0.0_wp, 1.0_wp]
+  end function spheroid_case
+
+  !> The resistance coefficient of a spheroid run: F/(6 pi mu r U) (translation, F = f L^3, U the
+  !> superficial velocity) or -T.Omega/(8 pi mu r^3 |Omega|^2) (rotation); torque_ratio = |T|/(F r) of
+  !> a translation (0 for a rotation).
+  subroutine spheroid_coefficient(result, m, case, coefficient, torque_ratio)
+    type(sphere_array_result_t), intent(in) :: result
+    integer, intent(in) :: m
+    type(sphere_array_case_t), intent(in) :: case
+    real(wp), intent(out) :: coefficient, torque_ratio
+    real(wp) :: r
+    r = result%radius
+    torque_ratio = 0
+    if (m <= 2) then
+      coefficient = result%drive(1) / (6.0_wp * acos(-1.0_wp) * result%dynamic_viscosity * r * result%superficial_velocity)
+      torque_ratio = norm2(result%torque) / (result%drive(1) * r)
+    else
+      coefficient = -dot_product(result%torque, case%rotation_axis) / norm2(case%rotation_axis) / &
+                    (8.0_wp * acos(-1.0_wp) * result%dynamic_viscosity * r**3 * result%angular_speed)
+    end if
+  end subroutine spheroid_coefficient
+
+  !> One spheroid run, spheroid:shape:motion:thin cells:box cells:scheme:nu dt/dx^2[:offset[:nx:ny:nz]],
+  !> motion one of along, across, about, tumble (rotate across the axis), scheme explicit or
+  !> crank_nicolson; offset 'centred' puts the centre on a grid symmetry point, 'offset' (default) at
+  !> the ladder's sub-cell offset; nx:ny:nz a non-cubic box at the spacing of the box cells^3.
+  subroutine spheroid_single(spec)
+    character(len=*), intent(in) :: spec
+    character(len=*), parameter :: motion_names(4) = [character(len=6) :: 'along', 'across', 'about', 'tumble']
+    character(len=32) :: fields(11)
+    type(sphere_array_case_t) :: case
+    type(sphere_array_result_t) :: result
+    type(spheroid_t) :: unit_shape
+    real(wp) :: thin, number, coefficient, torque_ratio, reference(4)
+    integer :: box_cells(3)
+    character(len=32) :: box_label
+    integer :: n, m, cells, status(6)
+    call split_fields(spec, fields, n)
+    m = findloc(motion_names, trim(fields(3)), dim=1)
+    status = 1
+    if (n >= 7) then
+      read(fields(4), *, iostat=status(1)) thin
+      read(fields(5), *, iostat=status(2)) cells
+      read(fields(7), *, iostat=status(3)) number
+    end if
+    if (n >= 11) then
+      read(fields(9), *, iostat=status(4)) case%box_cells(1)
+      read(fields(10), *, iostat=status(5)) case%box_cells(2)
+      read(fields(11), *, iostat=status(6)) case%box_cells(3)
+    else
+      status(4:6) = 0
+    end if
+    if (n < 7 .or. m == 0 .or. any(status /= 0) .or. (trim(fields(2)) /= 'needle' .and. trim(fields(2)) /= 'disk')) then
+      if (is_root()) print '(a)', 'bench_immersed_ladder: '''//trim(spec)//''': expected spheroid:needle|disk:' // &
+          'along|across|about|tumble:thin cells:box cells:explicit|crank_nicolson:nu dt/dx^2[:centred|offset[:nx:ny:nz]]'
+      error stop 1
+    end if
+    box_cells = case%box_cells
+    case = spheroid_case(fields(2), m, thin, cells, fields(6), number)
+    case%box_cells = box_cells
+    if (n >= 8 .and. trim(fields(8)) == 'centred') case%offset_cells = 0
+    call run_sphere_array(case, result)
+    call spheroid_coefficient(result, m, case, coefficient, torque_ratio)
+    unit_shape = make_spheroid(trim(fields(2)), 1.0_wp, 1.0_wp)
+    reference = spheroid_resistance_coefficients(unit_shape%a, unit_shape%b)
+    write(box_label, '(i0,a)') cells, '^3'
+    if (all(case%box_cells > 0)) write(box_label, '(i0,a,i0,a,i0)') case%box_cells(1), 'x', case%box_cells(2), 'x', &
+                                                                     case%box_cells(3)
+    if (is_root()) print '(a,a,a,a,a,f5.2,a,a,a,a,a,f5.2,a,f5.2,a,f7.5,a,f8.5,a,f7.4,a,es8.1,a,i0,a,f5.1,a,f7.1,a,a)', &
+        '| ', trim(fields(2)), ' | ', trim(fields(3)), ' | ', thin, ' | ', trim(box_label), ' | ', trim(fields(6)), ' | ', &
+        number, ' | ', result%diameter_cells / 2, &
+        ' | ', result%radius_over_box, ' | ', coefficient, ' | ', reference(m), ' | ', torque_ratio, ' | ', &
+        result%steps, ' | ', result%mean_sweeps, ' | ', result%wall_seconds, merge(' |         ', ' unsteady |', result%steady)
+  end subroutine spheroid_single
+
+  !> The box correction carried from a coarse grid to a fine one (docs/validation.md, rung 6),
+  !> spheroid-transfer[:thin cells[:shape[:motion]]], default 8.8 cells, both shapes, all four motions.
+  !> The continuum box correction at a given r/L does not depend on the grid, so it is measured on the
+  !> coarse grid (4.4 cells thin) in boxes of 32, 40, 48 and 64 cells and fitted in the mobility
+  !> y = 1/coefficient: y + 2.837 r/L = y_inf + C3 (r/L)^3 + C5 (r/L)^5 for a translation (Hasimoto
+  !> 1959, J. Fluid Mech. 5, 317: the O(1/L) term of the lattice, shape-independent),
+  !> y = y_inf + C3 (r/L)^3 + C5 (r/L)^5 for a rotation (the rotlet's periodic images turn the fluid
+  !> at the body by -T/(6 mu L^3), the x^3 term; a stresslet adds to it). On the fine grid one box
+  !> at the r/L of the coarse 32^3 (32 thin/4.4 cells) and y_inf(fine) = y(fine) - [y_fit(r/L) - y_inf].
+  !> Crank-Nicolson at nu dt/dx^2 = 5 throughout (its steady-state shift is the same in every box:
+  !> it cancels in the correction; it is measured against explicit diffusion in the docs). Also printed:
+  !> y_inf from a line in (r/L)^3 through the three largest boxes, the fit's sensitivity.
+  subroutine spheroid_transfer(spec)
+    character(len=*), intent(in) :: spec
+    character(len=*), parameter :: motion_names(4) = [character(len=6) :: 'along', 'across', 'about', 'tumble']
+    character(len=8), parameter :: shapes(2) = [character(len=8) :: 'needle', 'disk']
+    real(wp), parameter :: hasimoto = 2.837_wp, coarse_thin = 4.4_wp, number = 5.0_wp
+    integer, parameter :: boxes(4) = [32, 40, 48, 64]
+    character(len=32) :: fields(4)
+    type(sphere_array_case_t) :: case
+    type(sphere_array_result_t) :: result
+    type(spheroid_t) :: unit_shape
+    real(wp) :: thin, x(size(boxes)), y(size(boxes)), series(3), line(2), reference(4), coefficient, torque_ratio
+    real(wp) :: lattice, coarse_inf, line_inf, fine_x, fine_y, fine_inf
+    integer :: n, s, m, b, status, fine_box
+    call split_fields(spec, fields, n)
+    thin = 8.8_wp
+    status = 0
+    if (n >= 2 .and. len_trim(fields(2)) > 0) read(fields(2), *, iostat=status) thin
+    if (status /= 0 .or. thin <= 0) then
+      if (is_root()) print '(a)', 'bench_immersed_ladder: '''//trim(spec)//''': thin cells is not a positive number'
+      error stop 1
+    end if
+    fine_box = nint(boxes(1) * thin / coarse_thin)
+    if (is_root()) then
+      print '(a)', '| shape | motion | thin cells | cells | r/L | raw coefficient | Oberbeck/Perrin | torque/(F r) | ' // &
+          'steps | iterations mean | wall s |'
+      print '(a)', '|---|---|---|---|---|---|---|---|---|---|---|'
+    end if
+    do s = 1, size(shapes)
+      if (n >= 3 .and. len_trim(fields(3)) > 0 .and. trim(fields(3)) /= trim(shapes(s))) cycle
+      unit_shape = make_spheroid(trim(shapes(s)), 1.0_wp, 1.0_wp)
+      reference = spheroid_resistance_coefficients(unit_shape%a, unit_shape%b)
+      do m = 1, size(motion_names)
+        if (n >= 4 .and. len_trim(fields(4)) > 0 .and. trim(fields(4)) /= trim(motion_names(m))) cycle
+        lattice = merge(hasimoto, 0.0_wp, m <= 2)
+        do b = 1, size(boxes) + 1
+          if (b <= size(boxes)) then
+            case = spheroid_case(shapes(s), m, coarse_thin, boxes(b), 'crank_nicolson', number)
+          else
+            case = spheroid_case(shapes(s), m, thin, fine_box, 'crank_nicolson', number)
+          end if
+          call run_sphere_array(case, result)
+          call spheroid_coefficient(result, m, case, coefficient, torque_ratio)
+          if (b <= size(boxes)) then
+            x(b) = result%radius_over_box
+            y(b) = 1.0_wp / coefficient + lattice * x(b)
+          else
+            fine_x = result%radius_over_box
+            fine_y = 1.0_wp / coefficient + lattice * fine_x
+          end if
+          if (is_root()) print '(a,a,a,a,a,f5.2,a,i0,a,f7.5,a,f8.5,a,f7.4,a,es8.1,a,i0,a,f5.1,a,f7.1,a,a)', '| ', &
+              trim(shapes(s)), ' | ', trim(motion_names(m)), ' | ', merge(coarse_thin, thin, b <= size(boxes)), ' | ', &
+              case%cells, '^3 | ', result%radius_over_box, ' | ', &
+              coefficient, ' | ', reference(m), ' | ', torque_ratio, ' | ', result%steps, ' | ', result%mean_sweeps, &
+              ' | ', result%wall_seconds, merge(' |         ', ' unsteady |', result%steady)
+        end do
+        call fit_power_series(x, y, [0.0_wp, 3.0_wp, 5.0_wp], series)
+        call fit_power_series(x(2:), y(2:), [0.0_wp, 3.0_wp], line)
+        coarse_inf = 1.0_wp / series(1)
+        line_inf = 1.0_wp / line(1)
+        ! The fine grid's y minus the coarse box correction at the fine box's r/L.
+        fine_inf = 1.0_wp / (fine_y - (series(2) * fine_x**3 + series(3) * fine_x**5))
+        if (is_root()) print '(a,a,a,a,a,f7.4,a,f6.2,a,f7.4,a,f6.2,a,f8.2,a,f9.1,a,f5.2,a,f7.4,a,f6.2,a)', '|   | ', &
+            trim(shapes(s)), ', ', trim(motion_names(m)), ': coarse extrapolated ', coarse_inf, ' (', &
+            100 * (coarse_inf / reference(m) - 1), '%; line through the 3 largest boxes ', line_inf, ' (', &
+            100 * (line_inf / reference(m) - 1), '%)); C3 ', series(2), ', C5 ', series(3), '; fine (', thin, &
+            ' cells thin) corrected ', fine_inf, ' (error ', 100 * (fine_inf / reference(m) - 1), '%) |'
+      end do
+    end do
+    if (is_root()) print '(a)', ''
+  end subroutine spheroid_transfer
+
+  !> Torque of a translating needle and disk (axis along and across the drive) at a sub-cell offset,
+  !> spheroid-symmetry[:thin cells[:shape]] (default the paper's thin dimension: needle 15, disk 8.8
+  !> cells), in a tight box: the torque vanishes by symmetry in any periodic lattice of the body, so
+  !> the box only has to hold it (2 nint(half extent) + 8 cells along each axis). Explicit diffusion,
+  !> Aitken stop as in the ladder. Bound: 1e-3 F r (ibm notes, rung 6).
+  subroutine spheroid_symmetry(spec)
+    character(len=*), intent(in) :: spec
+    character(len=8), parameter :: shapes(2) = [character(len=8) :: 'needle', 'disk']
+    real(wp), parameter :: paper_thin(2) = [15.0_wp, 8.8_wp]
+    character(len=32) :: fields(3)
+    type(sphere_array_case_t) :: case
+    type(sphere_array_result_t) :: result
+    type(spheroid_t) :: unit_shape
+    real(wp) :: thin, only_thin, half(3), coefficient, torque_ratio
+    integer :: n, s, m, status
+    call split_fields(spec, fields, n)
+    only_thin = 0
+    status = 0
+    if (n >= 2 .and. len_trim(fields(2)) > 0) read(fields(2), *, iostat=status) only_thin
+    if (status /= 0 .or. only_thin < 0) then
+      if (is_root()) print '(a)', 'bench_immersed_ladder: '''//trim(spec)//''': thin cells is not a positive number'
+      error stop 1
+    end if
+    if (is_root()) then
+      print '(a)', '| shape | motion | thin cells | box cells | torque/(F r) | bound | steps | wall s |'
+      print '(a)', '|---|---|---|---|---|---|---|---|'
+    end if
+    do s = 1, size(shapes)
+      if (n >= 3 .and. len_trim(fields(3)) > 0 .and. trim(fields(3)) /= trim(shapes(s))) cycle
+      thin = merge(paper_thin(s), only_thin, only_thin <= 0)
+      unit_shape = make_spheroid(trim(shapes(s)), 1.0_wp, 1.0_wp)
+      do m = 1, 2
+        case = spheroid_case(shapes(s), m, thin, 32, 'explicit', 0.06_wp)
+        ! Half extents in cells along x, y, z of the body's axis along x (m = 1) or y (m = 2).
+        half = case%radius_cells * unit_shape%b
+        half(m) = case%radius_cells * unit_shape%a
+        case%box_cells = 2 * nint(half) + 8
+        call run_sphere_array(case, result)
+        call spheroid_coefficient(result, m, case, coefficient, torque_ratio)
+        if (is_root()) print '(a,a,a,a,a,f5.2,a,i0,a,i0,a,i0,a,es8.1,a,i0,a,f7.1,a,a)', '| ', trim(shapes(s)), ' | ', &
+            merge('translate along ', 'translate across', m == 1), ' | ', thin, ' | ', case%box_cells(1), 'x', &
+            case%box_cells(2), 'x', case%box_cells(3), ' | ', torque_ratio, ' | 1e-3 | ', result%steps, ' | ', &
+            result%wall_seconds, merge(' |         ', ' unsteady |', result%steady)
+      end do
+    end do
+    if (is_root()) print '(a)', ''
+  end subroutine spheroid_symmetry
+
+  !> The colon-separated fields of spec.
+  subroutine split_fields(spec, fields, n)
+    character(len=*), intent(in) :: spec
+    character(len=*), intent(out) :: fields(:)
+    integer, intent(out) :: n
+    integer :: start, colon
+    fields = ''
+    n = 0
+    start = 1
+    do while (n < size(fields))
+      n = n + 1
+      colon = index(spec(start:), ':')
+      if (colon == 0) then
+        fields(n) = spec(start:)
+        exit
+      end if
+      fields(n) = spec(start:start + colon - 2)
+      start = start + colon
+    end do
+  end subroutine split_fields
 end program bench_immersed_ladder
