@@ -261,9 +261,14 @@ def test_study_scripts_list_their_batches():
 
 def test_study_slurm_scripts_and_forced_field_dependency(spaced_tmp):
     out = spaced_tmp / "sa"
+    # Run from a directory of its own (the decks linked in), so that no forced field computed in the
+    # repository's output/ hides the one this test expects the script to schedule.
+    work = spaced_tmp / "work"
+    work.mkdir()
+    (work / "input").symlink_to(REPO / "input")
     result = run_tool([REPO / "tools" / "speed-accuracy-study.sh", "--slurm", "-o", out, "-N", "2",
                        "--shapes", "disk", "--knobs", "grid", "--runs-256", "0",
-                       "--sbatch-option", "--partition=short"], cwd=REPO)
+                       "--sbatch-option", "--partition=short"], cwd=work)
     assert result.returncode == 0, result.stderr + result.stdout
     submit = (out / "submit-all.sh").read_text()
     assert run_tool(["bash", "-n", out / "submit-all.sh"]).returncode == 0
