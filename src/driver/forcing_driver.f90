@@ -6,6 +6,9 @@
 !> handed to fluid_advance (added as dt f^n in the predictor), then the OU processes advance by the
 !> same dt to f^{n+1}. The checkpoint stores the packed OU state and stream ('forcing/state'), so a
 !> restart continues the same realisation bit for bit on any rank count.
+!> A fresh start from a forced field (&fluid init = 'file') takes the OU coefficients stored with it
+!> (&forcing initial_state = 'field', default) and the deck's own stream: forcing and field start
+!> correlated, so the box stays stationary (docs/theory.md, "Forcing").
 module forcing_driver
   use agglo_kinds, only: wp, i8
   use agglo_config, only: agglo_config_t
@@ -135,7 +138,8 @@ contains
 
   !> At the end of a forced run: final_field.h5 in the run directory (the velocity and pressure in
   !> the layout &fluid init = 'file' reads on any rank count: fluid/u, v, w, pressure, grid_shape,
-  !> plus the time reached and the forcing state for reference). Collective.
+  !> plus the forcing state, whose OU coefficients a run started from this field takes with
+  !> &forcing initial_state = 'field'). Collective.
   subroutine forcing_driver_finish(driver, solver)
     type(forcing_driver_t), intent(inout) :: driver
     type(fluid_solver_t), intent(in) :: solver
