@@ -35,13 +35,17 @@ module config_forcing
     character(len=16) :: update = 'exact'            !< 'exact' OU update | 'euler_maruyama' (paper Eq. 3)
     integer :: statistics_interval = 100             !< steps between flow-statistics rows (flow_statistics.h5); 0 = none
     real(wp) :: average_start = 0.0_wp               !< s, time averages of the flow statistics start here
+    !> OU coefficients at the start of a fresh run: 'field' = those stored with the initial field
+    !> (forcing/state of &fluid init_file, when init = 'file'; else as 'stationary') | 'stationary' =
+    !> drawn from N(0, sigma^2), uncorrelated with the velocity (docs/theory.md, forcing start).
+    character(len=16) :: initial_state = 'field'
   end type forcing_config_t
 
   real(wp) :: time_scale, sigma, epsilon_star, target_dissipation, kappa_f_ratio, average_start
-  character(len=16) :: update
+  character(len=16) :: update, initial_state
   integer :: statistics_interval
   namelist /forcing/ time_scale, sigma, epsilon_star, target_dissipation, kappa_f_ratio, update, &
-                     statistics_interval, average_start
+                     statistics_interval, average_start, initial_state
 
 contains
 
@@ -50,6 +54,7 @@ contains
     time_scale = cfg%time_scale; sigma = cfg%sigma; epsilon_star = cfg%epsilon_star
     target_dissipation = cfg%target_dissipation; kappa_f_ratio = cfg%kappa_f_ratio; update = cfg%update
     statistics_interval = cfg%statistics_interval; average_start = cfg%average_start
+    initial_state = cfg%initial_state
   end subroutine to_namelist
 
   subroutine from_namelist(cfg)
@@ -57,6 +62,7 @@ contains
     cfg%time_scale = time_scale; cfg%sigma = sigma; cfg%epsilon_star = epsilon_star
     cfg%target_dissipation = target_dissipation; cfg%kappa_f_ratio = kappa_f_ratio; cfg%update = update
     cfg%statistics_interval = statistics_interval; cfg%average_start = average_start
+    cfg%initial_state = initial_state
   end subroutine from_namelist
 
   subroutine read_forcing_group(deck, cfg)
@@ -112,6 +118,7 @@ contains
         real_text(cfg%kappa_f_ratio), '>= 1 (kappa_F in units of kappa0 = 2 pi / L; below kappa0 no '// &
         'wavevector is forced; the paper uses 2.3)')
     call require_option('forcing', 'update', cfg%update, [character(len=16) :: 'exact', 'euler_maruyama'])
+    call require_option('forcing', 'initial_state', cfg%initial_state, [character(len=16) :: 'field', 'stationary'])
     if (cfg%statistics_interval < 0) call input_error('forcing', 'statistics_interval', &
         int_text(cfg%statistics_interval), '>= 0 (steps between flow-statistics rows; 0 = none)')
     call require_nonnegative('forcing', 'average_start', cfg%average_start)

@@ -6,6 +6,9 @@
 !> handed to fluid_advance (added as dt f^n in the predictor), then the OU processes advance by the
 !> same dt to f^{n+1}. The checkpoint stores the packed OU state and stream ('forcing/state'), so a
 !> restart continues the same realisation bit for bit on any rank count.
+!> A fresh start from a forced field (&fluid init = 'file') takes the OU coefficients stored with it
+!> (&forcing initial_state = 'field', default) and the deck's own stream: forcing and field start
+!> correlated, so the box stays stationary (docs/theory.md, "Forcing").
 module forcing_driver
   use agglo_kinds, only: wp, i8
   use agglo_config, only: agglo_config_t
@@ -18,7 +21,8 @@ module forcing_driver
   use fluid_restart, only: write_fluid_state
   use checkpoint_files, only: checkpoint_t
   use eswaran_pope_forcing, only: ep_forcing_t, forcing_init_on_grid, forcing_advance, forcing_set_fields, &
-                                  forcing_power_input, forcing_pack_state, forcing_unpack_state
+                                  forcing_power_input, forcing_pack_state, forcing_unpack_state, &
+                                  forcing_restore_coefficients
   implicit none
   private
   public :: forcing_driver_t, forcing_driver_start, forced_fluid_advance, forcing_driver_power_input, &
@@ -33,13 +37,14 @@ module forcing_driver
 contains
 
   !> Set up the forcing (if the deck asks) on the solver's grid; on a restart restore its state
-  !> from its group of the checkpoint the fluid was read from (open when restarting). Collective.
+  !> from its group of the checkpoint the fluid was read from (open when restarting). On a fresh
+  !> start from a field file (&fluid init = 'file') with &forcing initial_state = 'field', take the
+  !> OU coefficients stored with that field (start_from_field_state). Collective.
   subroutine forcing_driver_start(driver, cfg, solver, restart)
     type(forcing_driver_t), intent(inout) :: driver
     type(agglo_config_t), intent(in) :: cfg
     type(fluid_solver_t), intent(in) :: solver
     type(checkpoint_t), intent(in) :: restart          !< not open on a fresh start
-    type(h5_file_t) :: file
     integer(i8), allocatable :: words(:)
     driver%active = (cfg%scene%forcing == 'eswaran_pope')
     if (.not. driver%active) return
@@ -52,8 +57,33 @@ contains
       call h5_read_array(restart%file, 'forcing/state', words)
       call forcing_unpack_state(driver%forcing, words)
       call log_line('forcing: OU state and random stream restored from '//restart%path)
+    else if (trim(cfg%fluid%init) == 'file' .and. trim(cfg%forcing%initial_state) == 'field') then
+      call start_from_field_state(driver, trim(cfg%fluid%init_file))
+    else
+      call log_line('forcing: OU coefficients drawn from the stationary distribution N(0, sigma^2)')
     end if
   end subroutine forcing_driver_start
+
+  !> The OU coefficients b^ of the forced run that wrote the initial field (its forcing/state: a
+  !> final_field.h5 or a checkpoint), so that f starts correlated with u and the power input <f.u>
+  !> at its stationary value; coefficients drawn afresh are uncorrelated with u, <f.u> starts near
+  !> zero and the box loses energy for several k/epsilon (docs/theory.md). The deck's stream is kept.
+  subroutine start_from_field_state(driver, path)
+    type(forcing_driver_t), intent(inout) :: driver
+    character(len=*), intent(in) :: path
+    type(h5_file_t) :: file
+    integer(i8), allocatable :: words(:)
+    call h5_open(file, path, writable=.false.)
+    if (.not. h5_exists(file, 'forcing/state')) call fatal('forcing: &forcing initial_state = ''field'' '// &
+        'with &fluid init = ''file'' needs the forcing state (forcing/state) of the run that wrote '// &
+        '&fluid init_file = '''//path//''', which has none (a field snapshot or a run without forcing); '// &
+        'give the final_field.h5 or a checkpoint of a forced run, or set &forcing initial_state = ''stationary''')
+    call h5_read_array(file, 'forcing/state', words)
+    call h5_close(file)
+    call forcing_restore_coefficients(driver%forcing, words, '&fluid init_file '''//path//'''')
+    call log_line('forcing: OU coefficients from the initial field '//path//' (&forcing initial_state = '// &
+        '''field''); random stream from &run seed')
+  end subroutine start_from_field_state
 
   !> One fluid step with the forcing (or without, if it is off): f^n on the faces, fluid_advance,
   !> then the OU processes to the next time level. Collective.
@@ -108,7 +138,8 @@ contains
 
   !> At the end of a forced run: final_field.h5 in the run directory (the velocity and pressure in
   !> the layout &fluid init = 'file' reads on any rank count: fluid/u, v, w, pressure, grid_shape,
-  !> plus the time reached and the forcing state for reference). Collective.
+  !> plus the forcing state, whose OU coefficients a run started from this field takes with
+  !> &forcing initial_state = 'field'). Collective.
   subroutine forcing_driver_finish(driver, solver)
     type(forcing_driver_t), intent(inout) :: driver
     type(fluid_solver_t), intent(in) :: solver

@@ -36,6 +36,7 @@ module eswaran_pope_forcing
   public :: ep_forcing_t, forcing_init, forcing_init_on_grid, forcing_advance, forcing_add_to, forcing_set_field, &
             forcing_set_fields, &
             forcing_power_input, forcing_state_size, forcing_pack_state, forcing_unpack_state, &
+            forcing_restore_coefficients, &
             forcing_mode_extent, forcing_mode_is_forced, ep_power_estimate, epsilon_star_for_dissipation, &
             forcing_pair_count, forcing_mode_integers, forcing_wavevectors, forcing_coefficients, &
             forcing_projected, forcing_sigma, forcing_epsilon_star, forcing_time_scale, forcing_kappa0
@@ -490,17 +491,46 @@ contains
   subroutine forcing_unpack_state(self, words)
     type(ep_forcing_t), intent(inout) :: self
     integer(i8), intent(in) :: words(:)
-    integer :: m, c, at
-    if (.not. self%ready) call fatal('forcing_unpack_state: the forcing is not set up', collective=.false.)
-    if (size(words) < state_header) call fatal('forcing: checkpoint forcing state is truncated')
-    if (words(1) /= state_format) call fatal('forcing: checkpoint forcing state has an unknown format')
-    if (words(2) /= int(self%n_pairs, i8) .or. size(words) /= forcing_state_size(self)) call fatal( &
-        'forcing: the checkpoint has '//int_text(int(words(2)))//' forced +-k pairs, the deck gives '// &
-        int_text(self%n_pairs)//' (kappa_f_ratio or the box changed since the checkpoint)')
-    if (words(3) /= int(self%update_kind, i8)) call log_line('forcing: note: the update form differs from '// &
-        'the checkpoint''s; the OU state continues with the deck''s form')
+    call check_packed_state(self, words, 'the checkpoint')
     self%steps = words(4)
     self%stream = stream_unpack(words(state_header + 1:state_header + stream_state_size))
+    call unpack_coefficients(self, words)
+  end subroutine forcing_unpack_state
+
+  !> Only the OU coefficients b^ of a packed state (e.g. the forcing/state of the final field a
+  !> fresh run starts from): f stays correlated with that field, so <f.u> starts at its stationary
+  !> value instead of near zero. The deck's own random stream is kept (runs of a batch differ in
+  !> their forcing from here on) and the step count restarts. source names the file for messages.
+  subroutine forcing_restore_coefficients(self, words, source)
+    type(ep_forcing_t), intent(inout) :: self
+    integer(i8), intent(in) :: words(:)
+    character(len=*), intent(in) :: source
+    call check_packed_state(self, words, source)
+    self%steps = 0_i8
+    call unpack_coefficients(self, words)
+  end subroutine forcing_restore_coefficients
+
+  !> A packed state fits this forcing: known format, the same number of forced +-k pairs.
+  subroutine check_packed_state(self, words, source)
+    type(ep_forcing_t), intent(in) :: self
+    integer(i8), intent(in) :: words(:)
+    character(len=*), intent(in) :: source
+    if (.not. self%ready) call fatal('forcing: restoring a state into a forcing that is not set up', &
+                                     collective=.false.)
+    if (size(words) < state_header) call fatal('forcing: the forcing state of '//source//' is truncated')
+    if (words(1) /= state_format) call fatal('forcing: the forcing state of '//source//' has an unknown format')
+    if (words(2) /= int(self%n_pairs, i8) .or. size(words) /= forcing_state_size(self)) call fatal( &
+        'forcing: '//source//' has '//int_text(int(words(2)))//' forced +-k pairs, the deck gives '// &
+        int_text(self%n_pairs)//' (&forcing kappa_f_ratio or the &grid box differ from the run that wrote it)')
+    if (words(3) /= int(self%update_kind, i8)) call log_line('forcing: note: the update form differs from '// &
+        'that of '//source//'; the OU state continues with the deck''s form')
+  end subroutine check_packed_state
+
+  !> b^ from the words after the header and the stream (forcing_pack_state's order), then f^.
+  subroutine unpack_coefficients(self, words)
+    type(ep_forcing_t), intent(inout) :: self
+    integer(i8), intent(in) :: words(:)
+    integer :: m, c, at
     at = state_header + stream_state_size
     do m = 1, self%n_pairs
       do c = 1, 3
@@ -509,7 +539,7 @@ contains
       end do
     end do
     call project(self)
-  end subroutine forcing_unpack_state
+  end subroutine unpack_coefficients
 
   ! ------------------------------------------------------------------ accessors
 

@@ -11,7 +11,7 @@ program test_eswaran_pope_forcing
   use eswaran_pope_forcing, only: ep_forcing_t, forcing_init, forcing_advance, forcing_set_field, forcing_add_to, &
       forcing_power_input, forcing_pack_state, forcing_unpack_state, forcing_pair_count, forcing_mode_integers, &
       forcing_wavevectors, forcing_projected, forcing_coefficients, forcing_epsilon_star, forcing_sigma, &
-      forcing_kappa0, ep_power_estimate, epsilon_star_for_dissipation
+      forcing_kappa0, ep_power_estimate, epsilon_star_for_dissipation, forcing_restore_coefficients
   use parallel_env, only: parallel_start
   use test_framework, only: test_start, test_finish, check, check_close, check_below, check_equal
   implicit none
@@ -34,6 +34,7 @@ program test_eswaran_pope_forcing
   call test_power_input()
   call test_strength_inputs()
   call test_pack_unpack()
+  call test_restore_coefficients()
 
   call test_finish()
 
@@ -265,4 +266,35 @@ contains
     end do
     cfg%update = 'exact'
   end subroutine test_pack_unpack
+
+  !> Start from a forced field (&forcing initial_state = 'field'): only b^ of a packed state are
+  !> taken; the stream stays the deck's own (seed 99: the same words and draws as an untouched set-up
+  !> with seed 99) and the step count restarts. Packed words (int64) compared, so bit for bit.
+  subroutine test_restore_coefficients()
+    type(ep_forcing_t) :: restored, own_seed
+    integer(i8), allocatable :: written(:), after(:), reference(:)
+    integer, parameter :: n(3) = [8, 8, 8]
+    real(wp), parameter :: lengths(3) = [1.0e-3_wp, 1.0e-3_wp, 1.0e-3_wp]
+    integer :: step, first_b
+    call forcing_init(forcing, cfg, 21, n, lengths, n(3), 0)
+    do step = 1, 13
+      call forcing_advance(forcing, 1.0e-4_wp)
+    end do
+    written = forcing_pack_state(forcing)
+    call forcing_init(restored, cfg, 99, n, lengths, n(3), 0)
+    call forcing_init(own_seed, cfg, 99, n, lengths, n(3), 0)
+    call forcing_restore_coefficients(restored, written, 'test words')
+    after = forcing_pack_state(restored)
+    reference = forcing_pack_state(own_seed)
+    first_b = size(written) - 6 * forcing_pair_count(forcing) + 1
+    call check(all(after(first_b:) == written(first_b:)), 'restore_coefficients_takes_b_hat')
+    call check(all(after(5:first_b - 1) == reference(5:first_b - 1)), 'restore_coefficients_keeps_own_stream')
+    call check_equal(int(after(4)), 0, 'restore_coefficients_restarts_step_count')
+    call check(all(forcing_projected(restored) == forcing_projected(forcing)), 'restore_coefficients_projects_f_hat')
+    call forcing_advance(restored, 1.0e-4_wp)
+    call forcing_advance(own_seed, 1.0e-4_wp)
+    after = forcing_pack_state(restored)
+    reference = forcing_pack_state(own_seed)
+    call check(all(after(5:first_b - 1) == reference(5:first_b - 1)), 'restore_coefficients_draws_from_own_stream')
+  end subroutine test_restore_coefficients
 end program test_eswaran_pope_forcing
