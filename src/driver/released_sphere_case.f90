@@ -89,7 +89,7 @@ contains
     t0 = wall_time()
     n = case%cells
     if (.not. (case%diameter_cells > 0.0_wp .and. case%diameter_cells < 0.8_wp * n)) &
-      call fatal('released_sphere_case: diameter_cells must lie in (0, 0.8 cells), the sphere inside the box')
+      call fatal('released_sphere_case: diameter_cells must lie in (0, 0.8 * case%cells), the sphere inside the box')
     grid_cfg = grid_config_t(nx=n, ny=n, nz=n, length_x=box, length_y=box, length_z=box)
     fluid_cfg%density = density
     fluid_cfg%viscosity = viscosity
