@@ -86,6 +86,10 @@ contains
       call input_error('scene', 'added_mass', '.true. with fluid = '''//trim(cfg%scene%fluid)//''' and particles = '''// &
                        trim(cfg%scene%particles)//'''', '.false. (the added mass belongs to particle_coupling = '// &
                        '''point'' or ''resolved'' of the pair in the resolved fluid)')
+    if (cfg%scene%added_mass_history .and. .not. (cfg%scene%added_mass .and. cfg%scene%particle_coupling == 'resolved' &
+        .and. cfg%fluid%viscous_scheme == 'explicit')) call input_error('scene', 'added_mass_history', '.true.', &
+        '.false. unless added_mass = .true., particle_coupling = ''resolved'' and &fluid viscous_scheme = ''explicit'' '// &
+        '(the history estimate of the stabilisation; with crank_nicolson it is always taken)')
     if (cfg%pair%relative_to_fluid .and. cfg%scene%fluid /= 'resolved') call input_error('pair', &
         'relative_to_fluid', '.true. with &scene fluid = '''//trim(cfg%scene%fluid)//'''', '.false. (only a '// &
         'resolved fluid has a velocity at the particle centres)')

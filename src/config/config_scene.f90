@@ -19,13 +19,15 @@ module config_scene
     !> immersed boundary)
     character(len=16) :: particle_coupling = 'resolved'
     logical :: added_mass = .false.               !< particle_coupling = 'point': implicit added-mass term
+    !> particle_coupling = 'resolved', explicit diffusion: the stabilisation's history estimate
+    logical :: added_mass_history = .false.
   end type scene_config_t
 
   character(len=16) :: fluid, particles, forcing, ibm_coupling, particle_coupling
-  logical :: dlvo, collisions, added_mass
+  logical :: dlvo, collisions, added_mass, added_mass_history
   integer :: particle_substeps
   namelist /scene/ fluid, particles, forcing, ibm_coupling, dlvo, collisions, particle_substeps, particle_coupling, &
-                   added_mass
+                   added_mass, added_mass_history
 
 contains
 
@@ -33,14 +35,14 @@ contains
     type(scene_config_t), intent(in) :: cfg
     fluid = cfg%fluid; particles = cfg%particles; forcing = cfg%forcing; ibm_coupling = cfg%ibm_coupling
     dlvo = cfg%dlvo; collisions = cfg%collisions; particle_substeps = cfg%particle_substeps
-    particle_coupling = cfg%particle_coupling; added_mass = cfg%added_mass
+    particle_coupling = cfg%particle_coupling; added_mass = cfg%added_mass; added_mass_history = cfg%added_mass_history
   end subroutine to_namelist
 
   subroutine from_namelist(cfg)
     type(scene_config_t), intent(inout) :: cfg
     cfg%fluid = fluid; cfg%particles = particles; cfg%forcing = forcing; cfg%ibm_coupling = ibm_coupling
     cfg%dlvo = dlvo; cfg%collisions = collisions; cfg%particle_substeps = particle_substeps
-    cfg%particle_coupling = particle_coupling; cfg%added_mass = added_mass
+    cfg%particle_coupling = particle_coupling; cfg%added_mass = added_mass; cfg%added_mass_history = added_mass_history
   end subroutine from_namelist
 
   subroutine read_scene_group(deck, cfg)

@@ -302,7 +302,8 @@ contains
                                          cfg%scene%added_mass, cfg%run%restart, cfg%pair%gravity, &
                                          default_predictor_config(cfg%fluid%predictor_tolerance, &
                                                                   cfg%fluid%predictor_max_iterations), &
-                                         merge(cfg%bodies%mesh_level, -1, cfg%bodies%geometry == 'mesh'))
+                                         merge(cfg%bodies%mesh_level, -1, cfg%bodies%geometry == 'mesh'), &
+                                         explicit_history=cfg%scene%added_mass_history)
       call move_alloc(resolved, hydrodynamics)
     case default
       ! The deck checks allow only 'point' and 'resolved'.

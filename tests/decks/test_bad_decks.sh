@@ -81,6 +81,9 @@ expect_error relative_to_fluid_without_fluid 1 "&run name = 'p' /
 &pair relative_to_fluid = .true. /" '&pair relative_to_fluid' 'only a resolved fluid'
 expect_error added_mass_in_stokes_scene 1 "&run name = 'p' /
 &scene fluid = 'stokes', particles = 'pair', added_mass = .true. /" '&scene added_mass' 'particle_coupling'
+expect_error added_mass_history_with_crank_nicolson 1 "&run name = 'p' /
+&scene fluid = 'resolved', particles = 'pair', added_mass = .true., added_mass_history = .true. /
+&fluid viscous_scheme = 'crank_nicolson' /" '&scene added_mass_history' 'always taken'
 expect_error point_pair_larger_than_box 1 "&run name = 'p' /
 &scene fluid = 'resolved', particles = 'pair', particle_coupling = 'point' /
 &grid nx = 8, ny = 8, nz = 8, length_x = 4.0e-4, length_y = 4.0e-4, length_z = 4.0e-4 /

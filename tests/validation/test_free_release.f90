@@ -9,15 +9,19 @@
 !>   step's, where U falls as sqrt(t)), and at tau_p to 5e-5 relative; halving the step changes u(tau_p) by
 !>   less than 2e-5.
 !> Then the resolved run: D/dx = 8 in 32^3 (L = 4 D), density ratio 2.72, U_0 D / nu = 2.5e-4,
-!> nu dt / dx^2 = 0.06 (161 fluid steps over tau_p), 4 sub-steps, the added-mass stabilisation on:
-!> over t in [0.05 tau_p, tau_p] U_p within 5% of the reference (measured 2.7%, at tau_p, nearly all
-!> the box's: 0.7% in 48^3, 0.2% in 64^3, docs/validation.md), the distance travelled over tau_p
-!> within 5% (measured 1.0%), the first step's velocity within 2% of m U_0 / (m + m_f/2)
-!> (the impulsive pressure; the history's sqrt(t) drop arrives one step late), and the box's momentum
-!> (fluid nodes and sphere) equal to m U_0 to 1e-3. And the neutrally buoyant sphere (density ratio 1,
-!> 48^3, L = 6 D, nu dt / dx^2 = 0.015: 238 fluid steps over its shorter tau_p; at 0.06 the
-!> stabilisation's start transient, about 8 steps, fills 13% of tau_p and the velocity is off by up to
-!> 30% there): within 5% over [0.05 tau_p, tau_p] (measured 1.1%) and in the distance (0.1%).
+!> nu dt / dx^2 = 0.06 (162 fluid steps over tau_p), 4 sub-steps, the added-mass stabilisation with
+!> its history estimate (&scene added_mass_history; docs/theory.md, "History with explicit
+!> diffusion"), the non-incremental pressure of the decks: over the whole first tau_p, the start
+!> included, |U_p - U_ref| / U_0 within 5% (the issue's tolerance; measured 1.1%, 6.9% without the
+!> history estimate and with the incremental pressure, docs/validation.md), the first step within 1%
+!> of the reference at t = dt (measured 0.4%: the sqrt(t) drop of the history is taken within the
+!> step), over [0.05 tau_p, tau_p] U_p / U_ref within 5% (measured 2.6%, at tau_p, nearly all the
+!> box's: 0.9% in 48^3), the distance travelled within 5% (1.4%), and the box's momentum (fluid
+!> nodes and sphere) m U_0 to 2e-3 (measured 8.5e-4: the history reaction that the estimate takes
+!> one step before the explicit fluid delivers it, falling as 1/sqrt(t)). And the neutrally buoyant sphere
+!> (density ratio 1, 48^3, L = 6 D, 60 fluid steps over its shorter tau_p): |U_p - U_ref| / U_0
+!> within 5% over the whole tau_p (measured 0.9%; 15% before the history estimate), U_p / U_ref
+!> within 5% over [0.05 tau_p, tau_p] (2.5%) and in the distance.
 program test_free_release
   use agglo_kinds, only: wp
   use parallel_env, only: parallel_start
@@ -63,23 +67,25 @@ program test_free_release
   ! The resolved release (module released_sphere_case).
   call run_released_sphere(release_case_t(cells=32, diameter_cells=8.0_wp, density_ratio=2.72_wp), result)
   call compare_release(result, 16, 0.05_wp, comparison)
-  write(text, '(a,3f8.4,a,3f8.4,a,f7.4,a,f7.4,a,f7.4,a,f8.5)') 'release D/dx 8, 32^3: U_p/U_0 steps 1-3', comparison%first, &
-      ' (reference', comparison%first_reference, '); max rel. late ', comparison%largest_relative_late, &
-      ', displacement ', comparison%displacement_error, ', at tau_p ', comparison%final_relative, ', momentum ', &
-      result%momentum
+  write(text, '(a,3f8.4,a,3f8.4,a,f7.4,a,f7.4,a,f7.4,a,f7.4,a,f8.5)') 'release D/dx 8, 32^3: U_p/U_0 steps 1-3', &
+      comparison%first, ' (reference', comparison%first_reference, '); max diff ', comparison%largest_difference, &
+      ', max rel. late ', comparison%largest_relative_late, ', displacement ', comparison%displacement_error, &
+      ', at tau_p ', comparison%final_relative, ', momentum ', result%momentum
   print '(a)', trim(text)
+  call check_below(comparison%largest_difference, 0.05_wp, 'release_velocity_within_5pc_of_u0_over_whole_first_tau_p')
+  call check_close(comparison%first(1), comparison%first_reference(1), 0.01_wp, &
+                   'release_first_step_takes_added_mass_and_history')
   call check_below(comparison%largest_relative_late, 0.05_wp, 'release_velocity_within_5pc_over_first_tau_p')
   call check_below(abs(comparison%displacement_error), 0.05_wp, 'release_distance_within_5pc_over_first_tau_p')
-  call check_close(comparison%first(1), released_start_velocity(result%sphere, 1.0_wp), 0.02_wp, &
-                   'release_first_step_takes_the_added_mass_impulse')
-  call check_close(result%momentum, 1.0_wp, 1.0e-3_wp, 'release_box_momentum_conserved')
+  call check_close(result%momentum, 1.0_wp, 2.0e-3_wp, 'release_box_momentum_conserved')
 
-  call run_released_sphere(release_case_t(cells=48, diameter_cells=8.0_wp, density_ratio=1.0_wp, viscous_number=0.015_wp), &
-                           result)
+  call run_released_sphere(release_case_t(cells=48, diameter_cells=8.0_wp, density_ratio=1.0_wp), result)
   call compare_release(result, 16, 0.05_wp, comparison)
-  write(text, '(a,f7.4,a,f7.4)') 'release D/dx 8, 48^3, density ratio 1: max rel. late ', comparison%largest_relative_late, &
-      ', displacement ', comparison%displacement_error
+  write(text, '(a,f7.4,a,f7.4,a,f7.4)') 'release D/dx 8, 48^3, density ratio 1: max diff ', &
+      comparison%largest_difference, ', max rel. late ', comparison%largest_relative_late, ', displacement ', &
+      comparison%displacement_error
   print '(a)', trim(text)
+  call check_below(comparison%largest_difference, 0.05_wp, 'neutral_release_within_5pc_of_u0_over_whole_first_tau_p')
   call check_below(comparison%largest_relative_late, 0.05_wp, 'neutral_release_velocity_within_5pc_over_first_tau_p')
   call check_below(abs(comparison%displacement_error), 0.05_wp, 'neutral_release_distance_within_5pc_over_first_tau_p')
   call test_finish()

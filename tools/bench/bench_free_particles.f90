@@ -15,8 +15,10 @@
 !>   Stokes reference (module unsteady_stokes) against its Laplace inversion and its own halved
 !>   steps; then the resolved sphere released at U_0 in fluid at rest (module released_sphere_case)
 !>   over tau_p against the reference: by default D/dx 8, 12 and 16 in boxes of 4 to 8 D, two
-!>   smaller steps, and the density ratio 1 with and without the added-mass stabilisation at two
-!>   steps (the sixth argument 0 switches the stabilisation off).
+!>   smaller step, the density ratio 1, each with the stabilisation's history estimate (&scene
+!>   added_mass_history) and the non-incremental pressure, and for comparison without the history
+!>   estimate, without the stabilisation and with the incremental pressure (arguments after
+!>   viscous_number: stabilisation, history estimate, incremental pressure, each 1 or 0; default 1 1 0).
 !> Prints Markdown tables.
 program bench_free_particles
   use agglo_kinds, only: wp
@@ -213,32 +215,40 @@ contains
         release_decay_laplace(sphere, tau, 16), ' / ', release_decay_laplace(sphere, tau, 32)
     if (is_root()) then
       print '(a)', 'Resolved release against the reference (U_p / U_0; late: t >= 0.05 tau_p; displacement over [0, tau_p])'
-      print '(a)', '| box | D/dx | rho_p/rho_f | stabilised | nu dt/dx^2 | steps | U_p/U_0 steps 1-3 | max diff | '// &
-          'max rel. late | displacement | rel. at tau_p | momentum | wall s |'
-      print '(a)', '|---|---|---|---|---|---|---|---|---|---|---|---|---|'
+      print '(a)', '| box | D/dx | rho_p/rho_f | stabilisation | pressure | nu dt/dx^2 | steps | U_p/U_0 steps 1-3 | '// &
+          'max diff | max rel. late | displacement | rel. at tau_p | momentum | wall s |'
+      print '(a)', '|---|---|---|---|---|---|---|---|---|---|---|---|---|---|'
     end if
     cells = nint(real_argument(2, 0.0_wp))
     if (cells > 0) then
       call release_row(release_case_t(cells=cells, diameter_cells=real_argument(3, 8.0_wp), &
                                       density_ratio=real_argument(4, 2.72_wp), viscous_number=real_argument(5, 0.06_wp), &
-                                      stabilise=real_argument(6, 1.0_wp) > 0.5_wp))
+                                      stabilise=real_argument(6, 1.0_wp) > 0.5_wp, &
+                                      history=real_argument(7, 1.0_wp) > 0.5_wp, &
+                                      pressure_scheme=merge('incremental    ', 'non_incremental', &
+                                                            real_argument(8, 0.0_wp) > 0.5_wp)))
       return
     end if
-    ! The box (4, 6, 8 D at D/dx 8; 4, 6 D at 12; 4 D at 16), the step, the density ratio.
+    ! The box (4, 6, 8 D at D/dx 8; 4, 6 D at 12; 4 D at 16), the step, the density ratio; then
+    ! what each part of the coupling does (the history estimate, the stabilisation, the pressure).
     call release_row(release_case_t(cells=32, diameter_cells=8.0_wp))
     call release_row(release_case_t(cells=48, diameter_cells=8.0_wp))
-    call release_row(release_case_t(cells=48, diameter_cells=8.0_wp, stabilise=.false.))
     call release_row(release_case_t(cells=64, diameter_cells=8.0_wp))
     call release_row(release_case_t(cells=48, diameter_cells=12.0_wp))
     call release_row(release_case_t(cells=72, diameter_cells=12.0_wp))
     call release_row(release_case_t(cells=64, diameter_cells=16.0_wp))
-    call release_row(release_case_t(cells=32, diameter_cells=8.0_wp, viscous_number=0.03_wp))
-    call release_row(release_case_t(cells=32, diameter_cells=8.0_wp, viscous_number=0.015_wp))
+    call release_row(release_case_t(cells=48, diameter_cells=8.0_wp, viscous_number=0.015_wp))
     call release_row(release_case_t(cells=48, diameter_cells=8.0_wp, density_ratio=1.0_wp))
-    call release_row(release_case_t(cells=48, diameter_cells=8.0_wp, density_ratio=1.0_wp, stabilise=.false.))
+    call release_row(release_case_t(cells=72, diameter_cells=12.0_wp, density_ratio=1.0_wp))
     call release_row(release_case_t(cells=48, diameter_cells=8.0_wp, density_ratio=1.0_wp, viscous_number=0.015_wp))
-    call release_row(release_case_t(cells=48, diameter_cells=8.0_wp, density_ratio=1.0_wp, viscous_number=0.015_wp, &
-                                    stabilise=.false.))
+    call release_row(release_case_t(cells=48, diameter_cells=8.0_wp, history=.false.))
+    call release_row(release_case_t(cells=48, diameter_cells=8.0_wp, stabilise=.false.))
+    call release_row(release_case_t(cells=48, diameter_cells=8.0_wp, pressure_scheme='incremental'))
+    call release_row(release_case_t(cells=48, diameter_cells=8.0_wp, history=.false., pressure_scheme='incremental'))
+    call release_row(release_case_t(cells=48, diameter_cells=8.0_wp, density_ratio=1.0_wp, history=.false.))
+    call release_row(release_case_t(cells=48, diameter_cells=8.0_wp, density_ratio=1.0_wp, stabilise=.false.))
+    call release_row(release_case_t(cells=48, diameter_cells=8.0_wp, density_ratio=1.0_wp, history=.false., &
+                                    pressure_scheme='incremental'))
   end subroutine release_section
 
   !> One resolved release against the reference on the run's own steps (refined 16 times): the
@@ -252,9 +262,10 @@ contains
     call run_released_sphere(case, result)
     call compare_release(result, refine, 0.05_wp, comparison)
     if (is_root()) print '(a,3f8.4)', '  reference after steps 1-3:', comparison%first_reference
-    if (is_root()) print '(a,i0,a,f5.2,a,f4.2,a,a,a,f6.4,a,i0,a,3(f7.4,a),f7.4,a,f7.4,a,f8.4,a,f8.4,a,f8.5,a,f7.1,a)', &
+    if (is_root()) print '(a,i0,a,f5.2,a,f4.2,a,a,a,a,a,f6.4,a,i0,a,3(f7.4,a),f7.4,a,f7.4,a,f8.4,a,f8.4,a,f8.5,a,f7.1,a)', &
         '| ', case%cells, '^3 | ', case%diameter_cells, ' | ', case%density_ratio, ' | ', &
-        merge('yes', 'no ', case%stabilise), ' | ', case%viscous_number, ' | ', &
+        trim(merge(merge('M_a + history', 'M_a          ', case%history), 'off          ', case%stabilise)), ' | ', &
+        trim(case%pressure_scheme), ' | ', case%viscous_number, ' | ', &
         comparison%steps, ' | ', comparison%first(1), ', ', comparison%first(2), ', ', comparison%first(3), ' | ', &
         comparison%largest_difference, ' | ', comparison%largest_relative_late, ' | ', comparison%displacement_error, &
         ' | ', comparison%final_relative, ' | ', result%momentum, ' | ', result%wall_seconds, ' |'
