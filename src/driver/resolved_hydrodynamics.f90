@@ -411,7 +411,8 @@ contains
     pure function start_rate(velocity) result(rate)
       real(wp), intent(in) :: velocity(3)
       real(wp) :: rate(3)
-      rate = velocity / self%dt
+      rate = 0
+      if (self%dt > 0.0_wp) rate = velocity / self%dt   ! no step yet: no start term (put_back)
     end function start_rate
   end subroutine resolved_loads
 
@@ -444,7 +445,7 @@ contains
   !> holds its added mass), with the weights h_s - g_s (-1 at the first step, summing to zero), and
   !> the change of the second step, A_first, with those of a change s - 1 steps back, kept for the
   !> whole run: the start's changes are the largest, and leaving the memory with their remaining
-  !> weight at once they would jump the velocity (1.4% of U_0 at the density ratio 1).
+  !> weight at once they would jump the velocity (1.3% of U_0 at the density ratio 1).
   pure function put_back(lagged, history, current, earlier, rotation, lag, start, first, since_start) result(estimate)
     real(wp), intent(in) :: lagged(3), history(3), current(3), earlier(:, :), rotation(3, 3), start(3), first(3)
     integer, intent(in) :: lag, since_start
