@@ -70,6 +70,8 @@ module immersed_boundary
 
   !> The rigid velocity and the load bookkeeping of one node, for a solver that imposes the body rows itself
   public :: rigid_velocity, account
+  !> The velocity a ghost row is built on (u_B, or the saturated Couette value), for the same solvers
+  public :: ghost_surface_value
 
   !> Lever arms r (minimum image of the point - the body's centre, m) of one component's nodes,
   !> computed once per placement so that an imposition costs only U + Omega x r per node.
@@ -77,6 +79,8 @@ module immersed_boundary
     real(wp), allocatable :: interior(:, :)   !< (3, n_interior), at the interior nodes
     real(wp), allocatable :: ghost(:, :)      !< (3, n_ghost), at the ghost nodes G
     real(wp), allocatable :: surface(:, :)    !< (3, n_ghost), at their surface points B
+    !> (3, n_ghost), at the other body's surface point B' of a saturated row, from that body's centre (else 0)
+    real(wp), allocatable :: opposite(:, :)
   end type lever_arms_t
 
   !> What the deck decides about the imposition.
@@ -254,8 +258,9 @@ contains
     end do
     do c = 1, 3
       associate (nodes => ibm%geometry%component(c), arms => ibm%arms(c))
-        if (allocated(arms%interior)) deallocate(arms%interior, arms%ghost, arms%surface)
-        allocate(arms%interior(3, nodes%n_interior), arms%ghost(3, nodes%n_ghost), arms%surface(3, nodes%n_ghost))
+        if (allocated(arms%interior)) deallocate(arms%interior, arms%ghost, arms%surface, arms%opposite)
+        allocate(arms%interior(3, nodes%n_interior), arms%ghost(3, nodes%n_ghost), arms%surface(3, nodes%n_ghost), &
+                 arms%opposite(3, nodes%n_ghost))
         do m = 1, nodes%n_interior
           arms%interior(:, m) = minimum_image(node_position(grid, c, nodes%interior(1, m), nodes%interior(2, m), &
                                                             nodes%interior(3, m)) - ibm%bodies(nodes%interior_body(m))%centre, box)
@@ -263,6 +268,9 @@ contains
         do m = 1, nodes%n_ghost
           arms%ghost(:, m) = minimum_image(nodes%ghost(m)%position - ibm%bodies(nodes%ghost(m)%body)%centre, box)
           arms%surface(:, m) = minimum_image(nodes%ghost(m)%surface_point - ibm%bodies(nodes%ghost(m)%body)%centre, box)
+          arms%opposite(:, m) = 0.0_wp
+          if (nodes%ghost(m)%saturated) arms%opposite(:, m) = &
+            minimum_image(nodes%ghost(m)%opposite_point - ibm%bodies(nodes%ghost(m)%opposite_body)%centre, box)
         end do
       end associate
     end do
@@ -653,6 +661,23 @@ contains
     call MPI_Allreduce(MPI_IN_PLACE, largest, 1, MPI_INTEGER, MPI_MAX, world)
   end function global_max_integer
 
+  !> The velocity a ghost row of component `component` is built on (m/s): u_B, the body's rigid
+  !> velocity at B, whose row reads u_G = (1 + kappa) u_B - kappa u_M; for a saturated row (kappa = 0)
+  !> the Couette value across the sub-cell gap, u_B - c (u_B' - u_B), with u_B' the other body's rigid
+  !> velocity at B' (immersed_geometry, c = couette_gain).
+  pure real(wp) function ghost_surface_value(ibm, component, g) result(value)
+    type(immersed_boundary_t), intent(in) :: ibm
+    integer, intent(in) :: component, g
+    real(wp) :: opposite
+    associate (ghost => ibm%geometry%component(component)%ghost(g), arms => ibm%arms(component))
+      value = rigid_velocity(ibm, ghost%body, component, arms%surface(:, g))
+      if (ghost%saturated) then
+        opposite = rigid_velocity(ibm, ghost%opposite_body, component, arms%opposite(:, g))
+        value = value - ghost%couette_gain * (opposite - value)
+      end if
+    end associate
+  end function ghost_surface_value
+
   !> Rigid-body velocity component `component` of body n at lever arm r: (U + Omega x r)_c (m/s).
   pure real(wp) function rigid_velocity(ibm, n, component, r) result(value)
     type(immersed_boundary_t), intent(in) :: ibm
@@ -725,7 +750,7 @@ contains
     associate (nodes => ibm%geometry%component(component))
       do g = 1, nodes%n_ghost
         associate (ghost => nodes%ghost(g))
-          surface(g) = rigid_velocity(ibm, ghost%body, component, ibm%arms(component)%surface(:, g))
+          surface(g) = ghost_surface_value(ibm, component, g)
           before(g) = field(ghost%node(1), ghost%node(2), ghost%node(3))
           scale = max(scale, abs(surface(g)), abs(before(g)))
         end associate

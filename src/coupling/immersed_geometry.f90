@@ -18,6 +18,12 @@
 !>   along n, and kappa = d_G/d_M (linear extrapolation); such nodes are flagged and counted. If B
 !>   itself lies inside another body (overlapping bodies), M = B and kappa = 0: the ghost takes the
 !>   surface velocity.
+!> - Below the saturation gap s_min (saturation_gap_cells h_max) the grid resolves nothing of the
+!>   film, and kappa = d_G/(s/2) would grow without bound: the row then leaves the fluid out
+!>   (kappa = 0) and takes the Couette profile between B and the other body's surface point
+!>   B' = B + s n, saturated at s_min: u_G = u_B - c (u_B' - u_B), c = d_G/max(s, s_min), with
+!>   u_B' the other body's rigid velocity at B' (the couette_gain, opposite_body and opposite_point
+!>   of the record; flagged `saturated` and counted as well as fallback).
 !> - u_M = sum_c w_c u_c over the 8 nodes of the component's grid cell that contains M (trilinear);
 !>   they may include ghost nodes, interior nodes and G itself, whose weight the implicit ghost
 !>   row moves to the diagonal: (1 + kappa w_G) u_G = (1 + kappa) u_B - kappa sum_{c /= G} w_c u_c.
@@ -40,7 +46,7 @@ module immersed_geometry
   implicit none
   private
   public :: immersed_body_t, immersed_options_t, ghost_node_t, component_nodes_t, immersed_geometry_t
-  public :: classify_nodes, node_position, thin_dimension_cells, fallback_count
+  public :: classify_nodes, node_position, thin_dimension_cells, fallback_count, saturated_count
   public :: node_fluid, node_ghost, node_interior
 
   integer(int8), parameter :: node_fluid = 0_int8, node_ghost = 1_int8, node_interior = 2_int8
@@ -58,6 +64,8 @@ module immersed_geometry
   type :: immersed_options_t
     character(len=16) :: image_point = 'mirror'  !< 'mirror': d_M = d_G; 'image': d_M = max(d_G, image_distance_cells h_max)
     real(wp) :: image_distance_cells = 1.5_wp    !< cells (of the largest spacing), for 'image'
+    !> cells (of the largest spacing): a fallback row whose gap s is below this takes the saturated Couette value
+    real(wp) :: saturation_gap_cells = 0.5_wp
   end type immersed_options_t
 
   !> A ghost node of one velocity component, with everything its ghost row needs.
@@ -72,6 +80,11 @@ module immersed_geometry
     real(wp) :: image_distance = 0.0_wp    !< m, d_M = |M - B|
     real(wp) :: extrapolation = 0.0_wp     !< kappa = d_G/d_M (1 for the pure mirror; 0 when M = B)
     logical :: fallback = .false.          !< M moved back because the image segment entered another body
+    !> fallback row with 0 < s < s_min: u_G = u_B - couette_gain (u_B' - u_B), no fluid node (kappa = 0)
+    logical :: saturated = .false.
+    integer :: opposite_body = 0           !< the other body of a saturated row (its B'), else 0
+    real(wp) :: opposite_point(3) = 0.0_wp !< m, B' = B + s n, in the periodic image frame of G (saturated rows)
+    real(wp) :: couette_gain = 0.0_wp      !< c = d_G/max(s, s_min) (saturated rows), else 0
     integer :: lower_offset(3) = 0         !< index of the stencil's lower corner minus the index of G
     integer :: stencil(3, 8) = 0           !< global i, j, k of the 8 nodes, wrapped into 1..n
     real(wp) :: weight(8) = 0.0_wp         !< trilinear weights (sum 1)
@@ -92,6 +105,7 @@ module immersed_geometry
     integer, allocatable :: interior_body(:)        !< (n_interior)
     integer :: n_fallback = 0                      !< ghosts whose image point was moved back (another body)
     integer :: n_overlap = 0                       !< ghosts whose surface point lies inside another body
+    integer :: n_saturated = 0                     !< fallback ghosts below the saturation gap (Couette rows)
     integer :: halo_planes_needed = 0              !< planes beyond this rank's slab that the stencils reach
   end type component_nodes_t
 
@@ -139,6 +153,13 @@ contains
     type(immersed_geometry_t), intent(in) :: geometry
     fallback_count = sum(geometry%component(:)%n_fallback)
   end function fallback_count
+
+  !> Ghost rows of all components on this rank that take the saturated Couette value (a gap below
+  !> the saturation gap; a subset of the fallback rows).
+  pure integer function saturated_count(geometry)
+    type(immersed_geometry_t), intent(in) :: geometry
+    saturated_count = sum(geometry%component(:)%n_saturated)
+  end function saturated_count
 
   !> Thinnest dimension of a body (2 min(a, b)) in cells of the largest grid spacing: the ghost
   !> layers of two opposite faces overlap when it is small (the disk of r = 50 um, aspect 5, is 2.2
@@ -305,6 +326,7 @@ contains
 
       nodes%n_fallback = 0
       nodes%n_overlap = 0
+      nodes%n_saturated = 0
       nodes%halo_planes_needed = 0
       ! The ghost list's index of each local ghost node, for the stencils' ghost links (zeroed after).
       do g = 1, nodes%n_ghost
@@ -314,6 +336,7 @@ contains
         call build_ghost_record(grid, bodies, options, component, status, k_lo, work%ghost_index, nodes%ghost(g))
         if (nodes%ghost(g)%fallback) nodes%n_fallback = nodes%n_fallback + 1
         if (nodes%ghost(g)%fallback .and. nodes%ghost(g)%image_distance <= 0.0_wp) nodes%n_overlap = nodes%n_overlap + 1
+        if (nodes%ghost(g)%saturated) nodes%n_saturated = nodes%n_saturated + 1
         k = nodes%ghost(g)%node(3) + nodes%ghost(g)%lower_offset(3)
         nodes%halo_planes_needed = max(nodes%halo_planes_needed, 1 - k, k + 1 - grid%nz_local)
       end do
@@ -524,8 +547,8 @@ contains
     integer, intent(in) :: ghost_index(:, :, :)  !< (nx, ny, nz_local) index of each local ghost node, else 0
     type(ghost_node_t), intent(inout) :: ghost
     type(surface_projection_t) :: projection
-    real(wp) :: box(3), spacing(3), centre(3), nearest_entry, fraction(3), t(3), w(0:1, 3)
-    integer :: n, corner, bits(3), node(3), d
+    real(wp) :: box(3), spacing(3), centre(3), nearest_entry, entry, saturation_gap, fraction(3), t(3), w(0:1, 3)
+    integer :: n, corner, bits(3), node(3), d, nearest_body
     type(immersed_body_t) :: body
 
     box = [grid%lx, grid%ly, grid%lz]
@@ -555,10 +578,14 @@ contains
     ! Fallback: the segment B -> B + d_M n must not enter another body; if it does, M goes to the
     ! middle of the gap to the nearest body along n.
     nearest_entry = huge(1.0_wp)
+    nearest_body = 0
     do n = 1, size(bodies)
       if (n == ghost%body) cycle
-      nearest_entry = min(nearest_entry, &
-                          segment_entry(bodies(n), box, ghost%surface_point, ghost%normal, ghost%image_distance))
+      entry = segment_entry(bodies(n), box, ghost%surface_point, ghost%normal, ghost%image_distance)
+      if (entry < nearest_entry) then
+        nearest_entry = entry
+        nearest_body = n
+      end if
     end do
     ghost%fallback = nearest_entry < ghost%image_distance
     if (ghost%fallback) ghost%image_distance = 0.5_wp * nearest_entry
@@ -567,6 +594,22 @@ contains
       ghost%extrapolation = ghost%distance / ghost%image_distance
     else
       ghost%extrapolation = 0.0_wp
+    end if
+    ! Saturation: below s_min the midpoint row's gain 2 d_G/s would feed the fluid next to the gap
+    ! back into the explicit Laplacian without bound; the row takes the Couette profile of the two
+    ! surfaces instead (no fluid node; equal to the midpoint row for a linear gap profile at s_min).
+    ! An overlap (s = 0) keeps u_G = u_B.
+    saturation_gap = options%saturation_gap_cells * maxval(spacing)
+    ghost%saturated = ghost%fallback .and. nearest_entry > 0.0_wp .and. nearest_entry < saturation_gap
+    if (ghost%saturated) then
+      ghost%opposite_body = nearest_body
+      ghost%opposite_point = ghost%surface_point + nearest_entry * ghost%normal
+      ghost%couette_gain = ghost%distance / saturation_gap
+      ghost%extrapolation = 0.0_wp
+    else
+      ghost%opposite_body = 0
+      ghost%opposite_point = 0.0_wp
+      ghost%couette_gain = 0.0_wp
     end if
 
     ! Trilinear stencil of M, located relative to G in index space (no wrap of positions needed).

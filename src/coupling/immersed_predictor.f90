@@ -39,7 +39,7 @@ module immersed_predictor
                           linear_solver_create, linear_solver_update_values, linear_solver_solve, rows_local_count
   use hypre_helmholtz_rows, only: global_row, helmholtz_rows_create, field_to_rows, rows_to_field
   use hypre_fft_preconditioner, only: fft_helmholtz_preconditioner_t, fft_preconditioner_create
-  use immersed_boundary, only: immersed_boundary_t, imposition_report_t, rigid_velocity, account
+  use immersed_boundary, only: immersed_boundary_t, imposition_report_t, rigid_velocity, account, ghost_surface_value
   implicit none
   private
   public :: immersed_predictor_t, immersed_predictor_create, immersed_predictor_reclassified, &
@@ -332,8 +332,7 @@ contains
       call field_to_rows(grid, field, sys%rhs)
       do g = 1, nodes%n_ghost
         sys%b_ghost(g) = sys%rhs(sys%ghost_rows(g))
-        sys%rhs(sys%ghost_rows(g)) = (1.0_wp + nodes%ghost(g)%extrapolation) * &
-                                     rigid_velocity(self%ibm, nodes%ghost(g)%body, c, arms%surface(:, g))
+        sys%rhs(sys%ghost_rows(g)) = (1.0_wp + nodes%ghost(g)%extrapolation) * ghost_surface_value(self%ibm, c, g)
         scale = max(scale, abs(sys%rhs(sys%ghost_rows(g))))
       end do
       do m = 1, nodes%n_interior

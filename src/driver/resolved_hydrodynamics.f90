@@ -80,7 +80,8 @@ module resolved_hydrodynamics
   use spheroid, only: spheroid_t
   use icosphere_mesh, only: icosphere_mesh_t, build_icosphere_mesh
   use stokes_resistance, only: spheroid_added_mass_coefficients, stokes_resistance_t, stokes_resistance_of
-  use immersed_geometry, only: immersed_body_t, thin_dimension_cells
+  use immersed_geometry, only: immersed_body_t, thin_dimension_cells, fallback_count, saturated_count
+  use parallel_env, only: global_sum
   use immersed_boundary, only: ibm_settings_t, ibm_set_bodies, ibm_impose, imposition_report_t
   use immersed_scene, only: immersed_scene_t, prescribed_motion_t, immersed_scene_create, immersed_step
   use pair_hydrodynamics, only: pair_hydrodynamics_t
@@ -123,6 +124,10 @@ module resolved_hydrodynamics
     real(wp), allocatable :: acceleration(:, :), angular_acceleration(:, :)           !< (3, n) lab, A^n, Alpha^n
     !> (3, n, history_steps) lab: A^{n-1}, A^{n-2}, ... (and Alpha), the history reaction's past (Crank-Nicolson)
     real(wp), allocatable :: earlier_acceleration(:, :, :), earlier_angular_acceleration(:, :, :)
+    !> Ghost rows over all ranks with the image point moved back to the mid-gap (another body near)
+    !> and, among them, the saturated Couette rows (gap below half a cell; immersed_geometry): the
+    !> last step's counts and the most in one step
+    integer :: fallbacks = 0, saturated = 0, most_fallbacks = 0, most_saturated = 0
   contains
     procedure :: prepare => resolved_prepare
     procedure :: fluid_step => resolved_fluid_step
@@ -327,6 +332,10 @@ contains
     self%force = self%scene%force
     self%torque = self%scene%torque
     self%dt = dt
+    self%fallbacks = nint(global_sum(real(fallback_count(self%scene%ibm%geometry), wp)))
+    self%saturated = nint(global_sum(real(saturated_count(self%scene%ibm%geometry), wp)))
+    self%most_fallbacks = max(self%most_fallbacks, self%fallbacks)
+    self%most_saturated = max(self%most_saturated, self%saturated)
     self%earlier_acceleration = eoshift(self%earlier_acceleration, shift=-1, boundary=0.0_wp, dim=3)
     self%earlier_acceleration(:, :, 1) = self%acceleration
     self%earlier_angular_acceleration = eoshift(self%earlier_angular_acceleration, shift=-1, boundary=0.0_wp, dim=3)
@@ -497,7 +506,8 @@ contains
     do i = 1, size(self%force, 2)
       text = text//' '//real_text(norm2(self%force(:, i)))
     end do
-    text = text//' N'
+    text = text//' N, fallback rows '//int_text(self%fallbacks)//' (saturated '//int_text(self%saturated)// &
+           '; most '//int_text(self%most_fallbacks)//', '//int_text(self%most_saturated)//')'
   end function resolved_progress_text
 
   !> The provider's state across fluid steps (group resolved_hydrodynamics of the transaction).

@@ -28,7 +28,7 @@ module resolved_scene
                                     flow_output_finish
   use parallel_env, only: global_sum
   use immersed_boundary, only: ibm_settings_t, status_change_summary
-  use immersed_geometry, only: fallback_count, immersed_body_t
+  use immersed_geometry, only: fallback_count, saturated_count, immersed_body_t
   use immersed_predictor, only: default_predictor_config
   use particle_output, only: particle_output_t, particle_output_flush, particle_output_close
   use bodies_particle_output, only: bodies_output_open, bodies_output_row
@@ -60,7 +60,7 @@ contains
     ! moved back to the mid-gap (immersed_geometry): this step's count over all ranks, the sum over
     ! the run's steps, the steps with any, the most in one step.
     integer :: fallbacks, fallback_steps, fallback_most
-    integer(i8) :: fallback_rows
+    integer(i8) :: fallback_rows, saturated_rows   ! saturated: the Couette rows among them (gap below half a cell)
 
     call start_fluid(cfg, solver, restart)
     timer_io = timer_register('I/O')
@@ -80,7 +80,7 @@ contains
       call output_fields(solver)
     end if
     first_step = solver%step
-    fallbacks = 0; fallback_steps = 0; fallback_most = 0; fallback_rows = 0
+    fallbacks = 0; fallback_steps = 0; fallback_most = 0; fallback_rows = 0; saturated_rows = 0
     start_wall = wall_time()
     step_wall = start_wall
 
@@ -138,7 +138,8 @@ contains
       call particle_output_close(bodies_h5)
       call log_line('immersed boundary: image-point fallbacks (image segment inside another body, moved back to '// &
           'the mid-gap) in '//int_text(fallback_steps)//' of '//int_text(solver%step - first_step)//' steps, '// &
-          int_text(fallback_rows)//' ghost rows in all, at most '//int_text(fallback_most)//' in one step')
+          int_text(fallback_rows)//' ghost rows in all ('//int_text(saturated_rows)//' saturated Couette rows), at most '// &
+          int_text(fallback_most)//' in one step')
     end if
     call timing_report(solver%step - first_step, wall_time() - start_wall)
     call log_line('resolved scene: '//trim(cfg%run%name)//' reached t = '//real_text(solver%time)//' s; '// &
@@ -193,6 +194,7 @@ contains
           'about two cells; linear extrapolation, docs/theory.md)')
       fallback_steps = fallback_steps + 1
       fallback_rows = fallback_rows + fallbacks
+      saturated_rows = saturated_rows + nint(global_sum(real(saturated_count(bodies%ibm%geometry), wp)), i8)
       fallback_most = max(fallback_most, fallbacks)
     end subroutine count_fallbacks
 

@@ -11,7 +11,15 @@
 !>  - a linear field (the rigid motion U0 + Omega x (x - X0) shared by both bodies, each body moving
 !>    with it): the explicit imposition leaves it unchanged (every ghost row, fallback rows included,
 !>    already holds, to 1e-12 of the velocity scale), and at a gap of 0.5 h the implicit coupling,
-!>    whose pure mirrors now fall back, recovers it from zeroed ghost values.
+!>    whose pure mirrors now fall back, recovers it from zeroed ghost values;
+!>  - below the saturation gap s_min = 0.5 h (a gap of 0.2 h, implicit coupling): the rows whose
+!>    image segment enters the sphere within s_min are flagged saturated and counted, leave the
+!>    fluid out (kappa = 0) and take the Couette value u_G = u_B - (d_G/s_min)(u_B' - u_B), u_B' the
+!>    sphere's rigid velocity where the ray B + s n enters it (found here by bisection of its implicit
+!>    function, independently of the geometry module); with the two bodies in different rigid motions
+!>    and random fluid values the imposed ghost values equal that hand-computed value to 1e-12 of the
+!>    velocity scale (the linear field is not recovered there: a saturated row's gain is d_G/s_min
+!>    where the linear field needs d_G/s; the rows are exact for it only at s = s_min).
 program test_immersed_fallback
   use agglo_kinds, only: wp, i8
   use parallel_env, only: parallel_start
@@ -19,7 +27,7 @@ program test_immersed_fallback
   use quaternion, only: random_orientation, rotate_to_body, rotate_to_lab
   use spheroid, only: make_spheroid, implicit_function
   use fluid_grid, only: fluid_grid_t, grid_create, allocate_field
-  use immersed_geometry, only: immersed_body_t, immersed_geometry_t, node_position, fallback_count
+  use immersed_geometry, only: immersed_body_t, immersed_geometry_t, node_position, fallback_count, saturated_count
   use immersed_boundary, only: immersed_boundary_t, imposition_report_t, ibm_set_bodies, ibm_impose, ibm_begin_step
   use test_framework, only: test_start, test_finish, check_below, check_above, check_equal
   implicit none
@@ -31,9 +39,10 @@ program test_immersed_fallback
   real(wp), allocatable :: u(:, :, :), v(:, :, :), w(:, :, :), u0(:, :, :), v0(:, :, :), w0(:, :, :)
   real(wp) :: velocity(3, 2), angular_velocity(3, 2), dx, direction(3), reference_point(3), omega(3), base(3)
   real(wp) :: change, worst_surface, worst_kappa, worst_outside, largest_fraction
-  integer :: case_index, c, g, flagged, n
-  character(len=8), parameter :: couplings(3) = [character(len=8) :: 'explicit', 'implicit', 'implicit']
-  real(wp), parameter :: gaps(3) = [1.0_wp, 1.0_wp, 0.5_wp]   ! surface gap in cells
+  real(wp) :: worst_opposite, worst_gain, worst_couette, saturation_gap
+  integer :: case_index, c, g, flagged, n, saturated
+  character(len=8), parameter :: couplings(4) = [character(len=8) :: 'explicit', 'implicit', 'implicit', 'implicit']
+  real(wp), parameter :: gaps(4) = [1.0_wp, 1.0_wp, 0.5_wp, 0.2_wp]   ! surface gap in cells
   character(len=40) :: label
 
   call parallel_start()
@@ -47,7 +56,8 @@ program test_immersed_fallback
   reference_point = 16.0_wp * dx
   omega = [3.0_wp, -1.0_wp, 2.0_wp]
   base = [1.0e-3_wp, -2.0e-3_wp, 0.5e-3_wp]
-  do case_index = 1, 3
+  saturation_gap = 0.5_wp * dx
+  do case_index = 1, 4
     write(label, '(a,a,f3.1,a)') trim(couplings(case_index)), '_gap_', gaps(case_index), 'h'
     ! The needle near the box centre; the sphere on a random direction at the given surface gap
     ! from it (its centre on the needle's outward normal at the point of the needle hit by that
@@ -71,6 +81,11 @@ program test_immersed_fallback
       flagged = flagged + count(ibm%geometry%component(c)%ghost(1:ibm%geometry%component(c)%n_ghost)%fallback)
     end do
     call check_equal(fallback_count(ibm%geometry), flagged, trim(label)//'_fallbacks_counted')
+    saturated = 0
+    do c = 1, 3
+      saturated = saturated + count(ibm%geometry%component(c)%ghost(1:ibm%geometry%component(c)%n_ghost)%saturated)
+    end do
+    call check_equal(saturated_count(ibm%geometry), saturated, trim(label)//'_saturated_counted')
     write(*, '(a,a,i0,a,i0)') trim(label), ': fallback rows ', flagged, ' of ghost rows ', &
         sum(ibm%geometry%component(:)%n_ghost)
     if (case_index == 2) then
@@ -89,7 +104,11 @@ program test_immersed_fallback
           worst_surface = max(worst_surface, abs(implicit_function(bodies(n)%shape, &
               rotate_to_body(bodies(n)%orientation, r%surface_point + 2.0_wp * r%image_distance * r%normal &
                                                     - bodies(n)%centre))))
-          worst_kappa = max(worst_kappa, abs(r%extrapolation - r%distance / r%image_distance))
+          if (r%saturated) then
+            worst_kappa = max(worst_kappa, abs(r%extrapolation))
+          else
+            worst_kappa = max(worst_kappa, abs(r%extrapolation - r%distance / r%image_distance))
+          end if
           worst_outside = min(worst_outside, implicit_function(bodies(1)%shape, rotate_to_body(bodies(1)%orientation, &
               r%image_point - bodies(1)%centre)), implicit_function(bodies(2)%shape, &
               rotate_to_body(bodies(2)%orientation, r%image_point - bodies(2)%centre)))
@@ -102,7 +121,11 @@ program test_immersed_fallback
     call check_above(worst_outside, 0.0_wp, trim(label)//'_image_point_outside_both_bodies')
     call check_below(largest_fraction, 1.0_wp, trim(label)//'_image_point_moved_back')
 
-    ! The linear field: unchanged by the explicit imposition; recovered by the implicit one.
+    ! The linear field: unchanged by the explicit imposition; recovered by the implicit one. Not
+    ! below s_min: a saturated row takes the gain d_G/s_min where the linear field needs d_G/s, and
+    ! the implicit rows whose stencils hold it inherit the difference.
+    if (case_index == 4) call check_couette_rows()
+    if (case_index == 4) cycle
     call fill_linear(1, u); call fill_linear(2, v); call fill_linear(3, w)
     u0 = u; v0 = v; w0 = w
     if (couplings(case_index) == 'implicit') then
@@ -116,10 +139,43 @@ program test_immersed_fallback
                  maxval(abs(v(1:32, 1:32, 1:32) - v0(1:32, 1:32, 1:32))), &
                  maxval(abs(w(1:32, 1:32, 1:32) - w0(1:32, 1:32, 1:32)))) / report%velocity_scale
     call check_below(change, 1.0e-12_wp, trim(label)//'_ghost_values_exact_for_linear_field')
+    call check_equal(saturated, 0, trim(label)//'_no_saturated_row_above_half_a_cell')
   end do
   call test_finish()
 
 contains
+
+  !> Below the saturation gap: the Couette rows, with the bodies in different rigid motions.
+  subroutine check_couette_rows()
+    write(*, '(a,a,i0)') trim(label), ': saturated rows ', saturated
+    call check_above(real(saturated, wp), 1.0_wp, trim(label)//'_saturated_rows_taken')
+    worst_opposite = 0; worst_gain = 0
+    do c = 1, 3
+      do g = 1, ibm%geometry%component(c)%n_ghost
+        associate (r => ibm%geometry%component(c)%ghost(g))
+          if (.not. r%saturated) cycle
+          n = 3 - r%body
+          worst_opposite = max(worst_opposite, abs(norm2(r%opposite_point - r%surface_point) &
+                                                   - entry_distance(n, r%surface_point, r%normal)) / dx)
+          worst_gain = max(worst_gain, abs(r%couette_gain - r%distance / saturation_gap))
+          if (.not. r%fallback .or. r%opposite_body /= n) worst_gain = huge(1.0_wp)
+        end associate
+      end do
+    end do
+    call check_below(worst_opposite, 1.0e-9_wp, trim(label)//'_opposite_point_where_the_ray_enters')
+    call check_below(worst_gain, 1.0e-14_wp, trim(label)//'_couette_gain_is_dG_over_smin')
+    velocity(:, 1) = [2.0e-3_wp, -1.0e-3_wp, 0.5e-3_wp]
+    velocity(:, 2) = [-1.5e-3_wp, 0.5e-3_wp, 1.0e-3_wp]
+    angular_velocity(:, 1) = [1.0_wp, 4.0_wp, -2.0_wp]
+    angular_velocity(:, 2) = [-3.0_wp, 0.5_wp, 2.5_wp]
+    call ibm_set_bodies(ibm, grid, bodies, velocity, angular_velocity, classify=.false.)
+    call fill_random(u); call fill_random(v); call fill_random(w)
+    call ibm_begin_step(ibm, grid, u, v, w)
+    call ibm_impose(ibm, grid, u, v, w, report)
+    worst_couette = 0
+    call compare_couette(1, u); call compare_couette(2, v); call compare_couette(3, w)
+    call check_below(worst_couette / report%velocity_scale, 1.0e-12_wp, trim(label)//'_saturated_rows_take_couette_value')
+  end subroutine check_couette_rows
 
   !> The image distance the fallback shortened: d_G (pure mirror) or max(d_G, 1.5 h) (image point).
   real(wp) function unmoved_image_distance(distance)
@@ -159,6 +215,60 @@ contains
       end do
     end do
   end subroutine fill_linear
+
+  !> Distance along the ray b + s n (s in [0, 0.5 h]) at which it enters body n: bisection of the
+  !> body's implicit function (positive outside), 200 halvings.
+  real(wp) function entry_distance(n, b, normal) result(s)
+    integer, intent(in) :: n
+    real(wp), intent(in) :: b(3), normal(3)
+    real(wp) :: low, high
+    integer :: iteration
+    low = 0
+    high = saturation_gap
+    do iteration = 1, 200
+      s = 0.5_wp * (low + high)
+      if (implicit_function(bodies(n)%shape, rotate_to_body(bodies(n)%orientation, b + s * normal - bodies(n)%centre)) &
+          > 0.0_wp) then
+        low = s
+      else
+        high = s
+      end if
+    end do
+  end function entry_distance
+
+  !> Largest |u_G - (u_B - (d_G/s_min)(u_B' - u_B))| over the saturated rows of component c (into
+  !> worst_couette), the body velocities and B' computed here.
+  subroutine compare_couette(c, field)
+    integer, intent(in) :: c
+    real(wp), intent(in) :: field(0:, 0:, 0:)
+    real(wp) :: u_b(3), u_opposite(3), opposite(3), expected(3)
+    integer :: g, m, o
+    do g = 1, ibm%geometry%component(c)%n_ghost
+      associate (r => ibm%geometry%component(c)%ghost(g))
+        if (.not. r%saturated) cycle
+        m = r%body
+        o = 3 - m
+        opposite = r%surface_point + entry_distance(o, r%surface_point, r%normal) * r%normal
+        u_b = velocity(:, m) + cross(angular_velocity(:, m), r%surface_point - bodies(m)%centre)
+        u_opposite = velocity(:, o) + cross(angular_velocity(:, o), opposite - bodies(o)%centre)
+        expected = u_b - r%distance / saturation_gap * (u_opposite - u_b)
+        worst_couette = max(worst_couette, abs(field(r%node(1), r%node(2), r%node(3)) - expected(c)))
+      end associate
+    end do
+  end subroutine compare_couette
+
+  !> Random values of the size of the body velocities at every node (halos included).
+  subroutine fill_random(field)
+    real(wp), intent(inout) :: field(0:, 0:, 0:)
+    integer :: i, j, k
+    do k = 0, grid%nz_local + 1
+      do j = 0, grid%ny + 1
+        do i = 0, grid%nx + 1
+          field(i, j, k) = 2.0e-3_wp * stream_normal(stream)
+        end do
+      end do
+    end do
+  end subroutine fill_random
 
   subroutine zero_ghosts(c, field)
     integer, intent(in) :: c
