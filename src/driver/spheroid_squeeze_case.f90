@@ -73,8 +73,14 @@ contains
     real(wp), intent(in) :: radius_cells
     integer :: cells(3)
     real(wp) :: long, short
-    long = radius_cells * 5.0_wp**(2.0_wp / 3.0_wp)    ! the long semi-axis (aspect 5, a b^2 = r^3)
+    ! The long and short semi-axes (aspect 5, a b^2 = r^3): needle a = 5^(2/3) r, b = 5^(-1/3) r;
+    ! disk b = 5^(1/3) r, a = 5^(-2/3) r.
+    long = radius_cells * 5.0_wp**(2.0_wp / 3.0_wp)
     short = radius_cells * 5.0_wp**(-1.0_wp / 3.0_wp)
+    if (configuration == 'face' .or. configuration == 'edge') then
+      long = radius_cells * 5.0_wp**(1.0_wp / 3.0_wp)
+      short = radius_cells * 5.0_wp**(-2.0_wp / 3.0_wp)
+    end if
     select case (trim(configuration))
     case ('tip')
       cells = [even(4 * long + 40), even(2 * short + 20), even(2 * short + 20)]
@@ -117,8 +123,7 @@ contains
     h = solver%grid%dx
     radius = case%radius_cells * h
     gap = case%gap_cells * h
-    shape = 'needle'
-    if (case%configuration == 'face' .or. case%configuration == 'edge') shape = 'disk'
+    shape = shape_of(case%configuration)
     ! Body x (the symmetry axis) -> lab x, y or z.
     select case (trim(case%configuration))
     case ('tip', 'face')
@@ -145,6 +150,9 @@ contains
       call rigid_body_of_spheroid(bodies(n), motion(n)%shape, motion(n)%centre, motion(n)%orientation)
     end do
     result%semi_axes = [motion(1)%shape%a, motion(1)%shape%b]
+    if (2.0_wp * minval(result%semi_axes) < 4.0_wp * h) &
+      call fatal('spheroid squeeze: radius_cells = '//real_text(case%radius_cells)//' makes the '//trim(shape)// &
+                 ' thinner than the 4 cells the immersed boundary needs; allowed: needle r/dx >= 3.42, disk r/dx >= 5.85')
 
     ! The model at the closest points of the placement.
     call find_closest_points(motion(1)%shape, motion(1)%centre, motion(1)%orientation, motion(2)%shape, &
@@ -166,4 +174,18 @@ contains
     result%resolved%reynolds = result%reynolds
     result%resolved%wall_seconds = wall_time() - t0
   end subroutine run_spheroid_squeeze
+
+  !> The body of a configuration: 'disk' for face and edge, else 'needle'.
+  pure function shape_of(configuration) result(shape)
+    character(len=*), intent(in) :: configuration
+    character(len=8) :: shape
+    shape = 'needle'
+    if (configuration == 'face' .or. configuration == 'edge') shape = 'disk'
+  end function shape_of
+
+  function real_text(value) result(text)
+    real(wp), intent(in) :: value
+    character(len=16) :: text
+    write(text, '(g0.4)') value
+  end function real_text
 end module spheroid_squeeze_case
