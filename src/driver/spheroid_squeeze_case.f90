@@ -26,7 +26,7 @@ module spheroid_squeeze_case
   use wall_clock, only: wall_time
   use error_handling, only: fatal
   use fluid_solver, only: fluid_solver_t
-  use spheroid, only: spheroid_t, make_spheroid
+  use spheroid, only: make_spheroid
   use quaternion, only: quaternion_normalise
   use rigid_body, only: rigid_body_t, rigid_body_of_spheroid
   use closest_points, only: closest_points_t, find_closest_points
@@ -115,7 +115,8 @@ contains
     if (.not. any(spheroid_squeeze_configurations == case%configuration)) &
       call fatal('spheroid squeeze: configuration = '''//trim(case%configuration)// &
                  '''; allowed: tip, crossed, parallel, face, edge')
-    if (.not. (case%gap_cells > 0.0_wp)) call fatal('spheroid squeeze: gap_cells must be > 0')
+    if (.not. (case%gap_cells > 0.0_wp)) &
+      call fatal('spheroid squeeze: gap_cells = '//real_text(case%gap_cells)//'; allowed: > 0 (cells)')
     result%cells = case%cells
     if (any(case%cells <= 0)) result%cells = spheroid_squeeze_box(case%configuration, case%radius_cells)
     call squeeze_fluid(result%cells, solver, lengths)
@@ -140,7 +141,7 @@ contains
       orientation(:, 2) = orientation(:, 1)
     end select
     do n = 1, 2
-      motion(n)%shape = make_spheroid(trim(shape), radius, 1000.0_wp)
+      motion(n)%shape = make_spheroid(trim(shape), radius, 1000.0_wp)   ! density unused: the motion is prescribed
       motion(n)%orientation = orientation(:, n)
       extent = motion(n)%shape%b
       if (case%configuration == 'tip' .or. case%configuration == 'face') extent = motion(n)%shape%a
