@@ -176,6 +176,9 @@ validate: deps ## run the immersed-boundary validation ladder (the table in docs
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_immersed_cn
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_immersed_squeeze
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_immersed_squeeze 12 48 12 4 3 2 1.5 1 0.75 0.5
+	for c in crossed parallel tip; do $(MPIRUN) -np 1 $(BUILD)/bench/bench_immersed_squeeze spheroids 4 $$c 4 2 1 0.75 0.5; done
+	$(MPIRUN) -np 1 $(BUILD)/bench/bench_immersed_squeeze spheroids 6.43 edge 4 2 1 0.75 0.5
+	$(MPIRUN) -np 1 $(BUILD)/bench/bench_immersed_squeeze spheroids 6.43 face 4 1.5
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_free_particles
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_free_squeeze
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_free_cn

@@ -8,7 +8,10 @@
 !> (1982, J. Fluid Mech. 115, 13, Table 2). Gravity along x; the weight makes U_s about 1e-7 m/s
 !> (Re below 1e-4). Steady: the relative change of U_s per step below steady_tolerance.
 !> Also the box's momentum rho_f dV sum_{fluid u nodes} u + m U_p (zero: no net force on the box),
-!> over rho_f L^3 U_s.
+!> over rho_f L^3 U_s, and what the u nodes that changed status during the run carried across that
+!> budget's boundary: rho_f dV (sum of u over the nodes that became fluid, at the step they did,
+!> less the sum of u over the nodes that stopped being fluid, at their last fluid step), over the
+!> same, with the number of such changes.
 !>
 !> shape = 'needle' or 'disk' (aspect 5; volume-equivalent radius r from thin_cells, the thinnest
 !> dimension in cells) with its symmetry axis turned by tilt_degrees about z away from gravity:
@@ -59,6 +62,7 @@ module settling_sphere_case
     character(len=8) :: shape = 'sphere'         !< 'sphere', or 'needle' / 'disk' of aspect 5
     real(wp) :: thin_cells = 0                   !< spheroids: thinnest dimension in cells (sets r)
     real(wp) :: tilt_degrees = 0                 !< spheroids: symmetry axis from gravity (x), turned about z
+    real(wp) :: weight = 2.5e-12_wp              !< N, the net weight W (U_s about 1e-7 m/s, Re below 1e-4)
   end type settling_case_t
 
   type :: settling_result_t
@@ -66,6 +70,8 @@ module settling_sphere_case
     real(wp) :: diameter_cells = 0         !< D / dx
     real(wp) :: slip = 0                   !< m/s, U_s
     real(wp) :: momentum = 0               !< the box's momentum / (rho_f L^3 U_s)
+    real(wp) :: status_momentum = 0        !< momentum the u nodes' status changes carried / (rho_f L^3 U_s)
+    integer :: status_changes = 0          !< u nodes that became fluid or stopped being fluid, over the run
     real(wp) :: slip_vector(3) = 0         !< m/s, U_s per lab direction
     real(wp) :: weight(3) = 0              !< N, the net weight W (lab)
     real(wp) :: radius = 0                 !< m, volume-equivalent
@@ -81,8 +87,8 @@ module settling_sphere_case
     real(wp) :: wall_seconds = 0
   end type settling_result_t
 
-  ! Water-like units in a 1 mm cell, as sphere_array_case; W = 2.5e-12 N gives U_s about 1e-7 m/s.
-  real(wp), parameter :: box = 1.0e-3_wp, viscosity = 1.0e-6_wp, density = 1000.0_wp, weight = 2.5e-12_wp
+  ! Water-like units in a 1 mm cell, as sphere_array_case.
+  real(wp), parameter :: box = 1.0e-3_wp, viscosity = 1.0e-6_wp, density = 1000.0_wp
 
 contains
 
@@ -102,7 +108,9 @@ contains
     type(ibm_settings_t) :: settings
     type(resolved_hydrodynamics_t) :: provider
     real(wp) :: radius, gravity(3), dt, slip(3), slip_old(3), u_face(3), fluid_flux, t0, start(4), overlap
-    real(wp) :: weight_body(3), slip_body(3)
+    real(wp) :: weight_body(3), slip_body(3), status_flux
+    real(wp), allocatable :: u_before(:, :, :)
+    logical, allocatable :: fluid_before(:, :, :), fluid_after(:, :, :)
     integer :: step, substep, n, nz
 
     t0 = wall_time()
@@ -137,7 +145,7 @@ contains
     models%integrator = integrator_euler
     call particle_system_create(system, shape, body, models, [box, box, box])
     call particle_system_interact(system, 1.0_wp)
-    gravity = [weight / ((case%density_ratio - 1.0_wp) * density * shape(1)%volume), 0.0_wp, 0.0_wp]
+    gravity = [case%weight / ((case%density_ratio - 1.0_wp) * density * shape(1)%volume), 0.0_wp, 0.0_wp]
     settings%coupling = 'implicit'
     settings%tolerance = 1.0e-12_wp
     settings%max_sweeps = 100
@@ -149,8 +157,19 @@ contains
     dt = case%viscous_number * solver%grid%dx**2 / viscosity
     slip_old = 0
     slip = 0
+    status_flux = 0
     do step = 1, case%max_steps
+      associate (status => provider%scene%ibm%geometry%component(1)%status)
+        fluid_before = status(1:n, 1:n, 1:nz) == node_fluid
+      end associate
+      u_before = solver%u(1:n, 1:n, 1:nz)
       call provider%fluid_step(solver, forcing, system, dt)
+      associate (status => provider%scene%ibm%geometry%component(1)%status)
+        fluid_after = status(1:n, 1:n, 1:nz) == node_fluid
+      end associate
+      result%status_changes = result%status_changes + count(fluid_before .neqv. fluid_after)
+      status_flux = status_flux + sum(solver%u(1:n, 1:n, 1:nz), mask=fluid_after .and. .not. fluid_before) &
+                    - sum(u_before, mask=fluid_before .and. .not. fluid_after)
       do substep = 1, case%substeps
         call provider%loads(system, real(substep - 1, wp) / case%substeps, loads)
         call particle_system_step(system, dt / case%substeps, loads)
@@ -166,7 +185,7 @@ contains
     end do
     result%slip = slip(1)
     result%slip_vector = slip
-    result%drag_coefficient = weight / (6.0_wp * pi * density * viscosity * radius * slip(1))
+    result%drag_coefficient = case%weight / (6.0_wp * pi * density * viscosity * radius * slip(1))
     result%diameter_cells = 2.0_wp * radius / solver%grid%dx
     result%weight = provider%weight(:, 1)
     result%radius = radius
@@ -187,6 +206,9 @@ contains
     end associate
     result%momentum = (density * solver%grid%dx * solver%grid%dy * solver%grid%dz * fluid_flux &
                        + system%bodies(1)%mass * system%bodies(1)%velocity(1)) / (density * box**3 * slip(1))
+    result%status_changes = nint(global_sum(real(result%status_changes, wp)))
+    result%status_momentum = density * solver%grid%dx * solver%grid%dy * solver%grid%dz * global_sum(status_flux) &
+                             / (density * box**3 * slip(1))
     result%wall_seconds = wall_time() - t0
   end subroutine run_settling_sphere
 

@@ -50,6 +50,7 @@ module squeeze_case
   public :: squeeze_case_t, squeeze_result_t, run_squeeze, brenner_squeeze_coefficient, squeeze_speed, &
             squeeze_dynamic_viscosity
   public :: free_squeeze_case_t, free_squeeze_history_t, run_free_squeeze, approach_reference, free_squeeze_sample
+  public :: squeeze_fluid, squeeze_hold_to_steady_state
 
   type :: squeeze_case_t
     real(wp) :: diameter_cells = 8.0_wp          !< D / dx
@@ -135,17 +136,17 @@ contains
     beta = 4.0_wp / 3.0_wp * sinh(alpha) * total
   end function brenner_squeeze_coefficient
 
-  !> The fluid of both cases at rest: 2 n_y x n_y x n_y cells, the x length the 1 mm box, width (m)
-  !> the y and z lengths (n_y cells over half the x length); explicit diffusion, incremental pressure.
-  subroutine squeeze_fluid(width_cells, solver, width)
-    integer, intent(in) :: width_cells
+  !> The fluid of the squeeze cases at rest: cells(1) x cells(2) x cells(3) cells, the x length the
+  !> 1 mm box, lengths (m) the three box lengths (cubic cells); explicit diffusion, incremental pressure.
+  subroutine squeeze_fluid(cells, solver, lengths)
+    integer, intent(in) :: cells(3)
     type(fluid_solver_t), intent(out) :: solver
-    real(wp), intent(out) :: width
+    real(wp), intent(out) :: lengths(3)
     type(grid_config_t) :: grid_cfg
     type(fluid_config_t) :: fluid_cfg
-    width = box * width_cells / (2 * width_cells)
-    grid_cfg = grid_config_t(nx=2 * width_cells, ny=width_cells, nz=width_cells, length_x=box, length_y=width, &
-                             length_z=width)
+    lengths = box * real(cells, wp) / cells(1)
+    grid_cfg = grid_config_t(nx=cells(1), ny=cells(2), nz=cells(3), length_x=lengths(1), length_y=lengths(2), &
+                             length_z=lengths(3))
     fluid_cfg%density = density
     fluid_cfg%viscosity = viscosity
     fluid_cfg%viscous_scheme = 'explicit'
@@ -159,37 +160,64 @@ contains
     type(squeeze_case_t), intent(in) :: case
     type(squeeze_result_t), intent(out) :: result
     type(fluid_solver_t) :: solver
-    type(immersed_scene_t) :: scene
     type(prescribed_motion_t) :: motion(2)
-    type(ibm_settings_t) :: settings
-    real(wp) :: h, radius, gap, dt, force_old, force_new, t0, centres(3, 2), width
-    integer :: step, n
+    real(wp) :: h, radius, gap, t0, lengths(3)
+    integer :: n
 
     t0 = wall_time()
-    call squeeze_fluid(case%width_cells, solver, width)
+    call squeeze_fluid([2 * case%width_cells, case%width_cells, case%width_cells], solver, lengths)
 
     h = solver%grid%dx
     radius = 0.5_wp * case%diameter_cells * h
     gap = case%gap_cells * h
     do n = 1, 2
       motion(n)%shape = make_spheroid('sphere', radius, density)
-      centres(:, n) = [0.5_wp * box, 0.5_wp * width, 0.5_wp * width] + case%offset_cells * h
-      centres(1, n) = centres(1, n) + (2 * n - 3) * (radius + 0.5_wp * gap)
+      motion(n)%centre = 0.5_wp * lengths + case%offset_cells * h
+      motion(n)%centre(1) = motion(n)%centre(1) + (2 * n - 3) * (radius + 0.5_wp * gap)
       motion(n)%velocity = [(3 - 2 * n) * speed, 0.0_wp, 0.0_wp]   ! body 1 along +x, body 2 along -x
-      motion(n)%centre = centres(:, n)
     end do
+    call squeeze_hold_to_steady_state(case, solver, motion, result)
+    result%gap_over_radius = gap / radius
+    result%radius = radius
+    result%reference = 6.0_wp * pi * density * viscosity * radius * speed &
+                       * brenner_squeeze_coefficient(result%gap_over_radius)
+    result%error = result%force / result%reference - 1.0_wp
+    result%reynolds = 2.0_wp * speed * radius / viscosity
+    result%wall_seconds = wall_time() - t0
+  end subroutine run_squeeze
+
+  !> The fixed-placement run of every prescribed squeeze case: the two bodies of motion (shape,
+  !> orientation, velocity; centre = the placement to hold) moving at their rigid velocities on a
+  !> placement held fixed, the flow of the fresh solver run to steady state (relative change of the
+  !> force below case%steady_tolerance per step; coupling, nu dt/dx^2 and the step limit from case).
+  !> Sets result%force = (F_2x - F_1x) / 2 (> 0 resisting an approach along x), steps, steady and
+  !> cell (collective).
+  subroutine squeeze_hold_to_steady_state(case, solver, motion, result)
+    type(squeeze_case_t), intent(in) :: case
+    type(fluid_solver_t), intent(inout) :: solver
+    type(prescribed_motion_t), intent(in) :: motion(2)
+    type(squeeze_result_t), intent(inout) :: result
+    type(immersed_scene_t) :: scene
+    type(prescribed_motion_t) :: held(2)
+    type(ibm_settings_t) :: settings
+    real(wp) :: h, dt, force_old, force_new
+    integer :: step
+
+    h = solver%grid%dx
+    held = motion
     settings%coupling = case%coupling
     settings%max_sweeps = 100
     settings%fluid_density = density
     dt = case%viscous_number * h**2 / viscosity
     call hold_in_place(solver%time + dt)
-    call immersed_scene_create(scene, solver, motion, settings, [0.0_wp, 0.0_wp, 0.0_wp])
+    call immersed_scene_create(scene, solver, held, settings, [0.0_wp, 0.0_wp, 0.0_wp])
 
     force_old = 0
+    force_new = 0
     do step = 1, case%max_steps
       ! The placement of the step is c0 + U t at its end time: hold it at the fixed centres.
       call hold_in_place(solver%time + dt)
-      scene%motion = motion
+      scene%motion = held
       call immersed_step(scene, solver, dt)
       force_new = 0.5_wp * (scene%force(1, 2) - scene%force(1, 1))
       result%steps = step
@@ -200,14 +228,7 @@ contains
       force_old = force_new
     end do
     result%force = force_new
-    result%gap_over_radius = gap / radius
-    result%radius = radius
     result%cell = h
-    result%reference = 6.0_wp * pi * density * viscosity * radius * speed &
-                       * brenner_squeeze_coefficient(result%gap_over_radius)
-    result%error = result%force / result%reference - 1.0_wp
-    result%reynolds = 2.0_wp * speed * radius / viscosity
-    result%wall_seconds = wall_time() - t0
 
   contains
 
@@ -216,10 +237,11 @@ contains
       real(wp), intent(in) :: time
       integer :: m
       do m = 1, 2
-        motion(m)%centre = centres(:, m) - motion(m)%velocity * time
+        held(m)%centre = motion(m)%centre - motion(m)%velocity * time
       end do
     end subroutine hold_in_place
-  end subroutine run_squeeze
+  end subroutine squeeze_hold_to_steady_state
+
   !> The free approach (module header) from rest at start_gap_cells until the gap is below
   !> stop_gap_cells or max_steps fluid steps (collective).
   subroutine run_free_squeeze(case, history)
@@ -234,12 +256,13 @@ contains
     type(particle_loads_t) :: loads
     type(ibm_settings_t) :: settings
     type(resolved_hydrodynamics_t) :: provider
-    real(wp) :: h, radius, gap, width, dt, t0, centre(3), lubrication_sum
+    real(wp) :: h, radius, gap, width, dt, t0, centre(3), lubrication_sum, lengths(3)
     real(wp), allocatable :: rows(:, :)
     integer :: step, substep, n
 
     t0 = wall_time()
-    call squeeze_fluid(case%width_cells, solver, width)
+    call squeeze_fluid([2 * case%width_cells, case%width_cells, case%width_cells], solver, lengths)
+    width = lengths(2)
 
     h = solver%grid%dx
     radius = 0.5_wp * case%diameter_cells * h

@@ -16,6 +16,8 @@ program bench_immersed_squeeze
   use parallel_env, only: parallel_start, parallel_stop, is_root
   use squeeze_case, only: squeeze_case_t, squeeze_result_t, run_squeeze, squeeze_speed, squeeze_dynamic_viscosity
   use lubrication, only: lubrication_model_t, lubrication_geometry_t, lubrication_subgrid_resistance
+  use spheroid_squeeze_case, only: spheroid_squeeze_case_t, spheroid_squeeze_result_t, run_spheroid_squeeze, &
+                                   spheroid_squeeze_configurations
   implicit none
   type(squeeze_case_t) :: case
   type(squeeze_result_t) :: result, widest
@@ -27,6 +29,12 @@ program bench_immersed_squeeze
 
   call parallel_start()
   count = command_argument_count()
+  if (count >= 1) call get_command_argument(1, argument)
+  if (count >= 1 .and. argument == 'spheroids') then
+    call spheroid_ladder()
+    call parallel_stop()
+    stop
+  end if
   if (count >= 1) then
     call get_command_argument(1, argument)
     read(argument, *) case%diameter_cells
@@ -84,4 +92,76 @@ contains
     total_error = (result%force + lubrication_subgrid_resistance(model, geometry, case%gap_cells * result%cell) &
                    * 2.0_wp * squeeze_speed) / result%reference - 1
   end function total_error
+
+  ! ---- Needles and disks (src/driver/spheroid_squeeze_case.f90) ----------------------------------
+  !> `bench_immersed_squeeze spheroids [r/dx [configuration|all [gaps...]]]`: two needles or disks of
+  !> aspect 5 (volume-equivalent radius r/dx, default 6, about the paper's resolution) in the five
+  !> configurations of the case (default all) at fixed gaps (cells, the widest first; default 4 2 1
+  !> 0.5), against the sub-grid model's resistance R(h) 2U at the closest points (module lubrication).
+  !> "Rise" compares F(h) - F(h_1) with R(h) - R(h_1) (h_1 the widest gap), "leading" the same with
+  !> the Reynolds film 6 pi mu R_eff^2 2U / h alone. Prints a Markdown table.
+  subroutine spheroid_ladder()
+    type(spheroid_squeeze_case_t) :: spheroid_case
+    type(spheroid_squeeze_result_t) :: row, first
+    character(len=8), allocatable :: configurations(:)
+    real(wp), allocatable :: spheroid_gaps(:)
+    integer :: c, k
+    character(len=*), parameter :: spheroid_format = '(a,a,a,i0,a,i0,a,i0,a,f5.2,a,f6.3,a,f7.2,a,f7.2,a,' // &
+        'es11.4,a,es11.4,a,f7.3,a,a,a,a,a,i0,a,a,a,f7.1,a)'
+
+    if (count >= 2) then
+      call get_command_argument(2, argument)
+      read(argument, *) spheroid_case%radius_cells
+    end if
+    configurations = spheroid_squeeze_configurations
+    if (count >= 3) then
+      call get_command_argument(3, argument)
+      if (argument /= 'all') configurations = [character(len=8) :: argument]
+    end if
+    if (count >= 4) then
+      allocate(spheroid_gaps(count - 3))
+      do k = 4, count
+        call get_command_argument(k, argument)
+        read(argument, *) spheroid_gaps(k - 3)
+      end do
+    else
+      spheroid_gaps = [4.0_wp, 2.0_wp, 1.0_wp, 0.5_wp]
+    end if
+    spheroid_case%run%steady_tolerance = 3.0e-7_wp
+    spheroid_case%run%max_steps = 40000
+    if (is_root()) then
+      print '(a)', '| configuration | box (cells) | r/dx | h/dx | R_eff/dx | a_1/dx | F resolved (N) | ' // &
+          'F model R(h) 2U (N) | F / model | rise vs model | rise vs leading term | steps | steady | wall s |'
+      print '(a)', '|---|---|---|---|---|---|---|---|---|---|---|---|---|---|'
+    end if
+    do c = 1, size(configurations)
+      spheroid_case%configuration = configurations(c)
+      spheroid_case%cells = 0
+      do k = 1, size(spheroid_gaps)
+        spheroid_case%gap_cells = spheroid_gaps(k)
+        call run_spheroid_squeeze(spheroid_case, row)
+        if (k == 1) first = row
+        if (is_root()) print spheroid_format, '| ', trim(configurations(c)), ' | ', row%cells(1), 'x', row%cells(2), &
+            'x', row%cells(3), ' | ', spheroid_case%radius_cells, ' | ', spheroid_case%gap_cells, ' | ', &
+            row%geometry%reduced_radius / row%resolved%cell, ' | ', row%geometry%radius1 / row%resolved%cell, ' | ', &
+            row%resolved%force, ' | ', row%model_force, ' | ', row%resolved%force / row%model_force, ' | ', &
+            trim(rise(k, row, first, row%model_force, first%model_force)), ' | ', trim(rise(k, row, first, row%leading_force, &
+            first%leading_force)), &
+            ' | ', row%resolved%steps, ' | ', trim(merge('yes', 'no ', row%resolved%steady)), ' | ', &
+            row%resolved%wall_seconds, ' |'
+      end do
+      spheroid_case%cells = 0
+    end do
+  end subroutine spheroid_ladder
+
+  !> (F(h) - F(h_1)) / (reference(h) - reference(h_1)) - 1 in per cent for row k of a spheroid
+  !> ladder (first its widest gap); "(reference)" at h_1 itself.
+  character(len=16) function rise(k, row, first, reference, reference_first)
+    integer, intent(in) :: k
+    type(spheroid_squeeze_result_t), intent(in) :: row, first
+    real(wp), intent(in) :: reference, reference_first
+    rise = '(reference)'
+    if (k > 1) write(rise, '(sp,f7.1,a)') 100 * ((row%resolved%force - first%resolved%force) &
+                                                / (reference - reference_first) - 1), '%'
+  end function rise
 end program bench_immersed_squeeze
