@@ -17,7 +17,9 @@
 !>   Oberbeck/Perrin (rung 6); spheroid-transfer[:thin cells[:shape[:motion]]]: the box correction
 !>   fitted on four boxes at 4.4 cells thin and carried to one box at the finer grid;
 !>   spheroid-symmetry[:thin cells[:shape]]: torque of a translating needle and disk at the paper's
-!>   thin-dimension resolution in tight boxes; spheroid:shape:motion:thin:box:scheme:nu dt/dx^2: one run.
+!>   thin-dimension resolution in tight boxes; spheroid-offsets[:thin cells[:shape[:motion[:count...]]]]:
+!>   that torque over sub-cell offsets, momentum balance and face sum side by side;
+!>   spheroid:shape:motion:thin:box:scheme:nu dt/dx^2: one run.
 program bench_immersed_ladder
   use agglo_kinds, only: wp
   use parallel_env, only: parallel_start, parallel_stop, is_root
@@ -39,6 +41,9 @@ program bench_immersed_ladder
     call run_section('spheroids')
     call run_section('spheroids:6')
     call run_section('spheroid-symmetry')
+    call run_section('spheroid-offsets')
+    call run_section('spheroid-offsets:15:needle::4:crank_nicolson:5')
+    call run_section('spheroid-offsets:8.8:disk::4:crank_nicolson:5')
     call run_section('spheroid-transfer')
   else
     do a = 1, command_argument_count()
@@ -345,16 +350,18 @@ contains
     end if
   end subroutine spheroid_coefficient
 
-  !> One spheroid run, spheroid:shape:motion:thin cells:box cells:scheme:nu dt/dx^2[:offset[:nx:ny:nz[:level]]],
+  !> One spheroid run,
+  !> spheroid:shape:motion:thin cells:box cells:scheme:nu dt/dx^2[:offset[:nx:ny:nz[:level[:steady tolerance]]]],
   !> motion one of along, across, about, tumble (rotate across the axis), scheme explicit or
   !> crank_nicolson; offset 'centred' puts the centre on a grid symmetry point, 'offset' (default) at
   !> the ladder's sub-cell offset, or ox,oy,oz in cells; nx:ny:nz a non-cubic box at the spacing of
   !> the box cells^3 (0:0:0 the cubic box); level the icosphere level of a face-sum torque printed
-  !> beside the momentum one (translations).
+  !> beside the momentum one (translations; empty: none); steady tolerance the relative change per step
+  !> that stops the run (default 1e-7), which also prints the approach of the coefficient (print_tail).
   subroutine spheroid_single(spec)
     character(len=*), intent(in) :: spec
     character(len=*), parameter :: motion_names(4) = [character(len=6) :: 'along', 'across', 'about', 'tumble']
-    character(len=32) :: fields(12)
+    character(len=32) :: fields(13)
     type(sphere_array_case_t) :: case
     type(sphere_array_result_t) :: result
     type(spheroid_t) :: unit_shape
@@ -397,7 +404,15 @@ contains
         end if
       end if
     end if
-    if (n >= 12) then
+    if (n >= 13) then
+      read(fields(13), *, iostat=status(1)) case%steady_tolerance
+      if (status(1) /= 0 .or. case%steady_tolerance <= 0) then
+        if (is_root()) print '(a)', 'bench_immersed_ladder: '''//trim(spec)//''': the steady tolerance is a number > 0'
+        error stop 1
+      end if
+      case%history_every = 10
+    end if
+    if (n >= 12 .and. len_trim(fields(12)) > 0) then
       read(fields(12), *, iostat=status(1)) case%surface_level
       if (status(1) /= 0 .or. case%surface_level < 0) then
         if (is_root()) print '(a)', 'bench_immersed_ladder: '''//trim(spec)//''': the surface level is an icosphere ' // &
@@ -421,7 +436,31 @@ contains
         result%steps, ' | ', result%mean_sweeps, ' | ', result%wall_seconds, merge(' |         ', ' unsteady |', result%steady)
     if (is_root() .and. case%surface_level >= 0 .and. m <= 2) print '(a,i0,a,es8.1)', &
         '|   | face-sum torque/(F r), icosphere level ', case%surface_level, ': ', surface_ratio
+    ! With a steady tolerance given: the coefficient at the last samples 10 steps apart, and their
+    ! Aitken extrapolation (the slowest mode's geometric tail; a rotation's torque, or a
+    ! translation's torque over U).
+    if (is_root() .and. case%history_every > 0) call print_tail(result, m, case)
   end subroutine spheroid_single
+
+  !> The coefficient of a rotation (the torque about Omega) at the last three history samples and
+  !> the Aitken extrapolation of the geometric tail, x3 - (x3 - x2)^2 / ((x3 - x2) - (x2 - x1)): what
+  !> a run stopped at a loose steady tolerance still misses.
+  subroutine print_tail(result, m, case)
+    type(sphere_array_result_t), intent(in) :: result
+    integer, intent(in) :: m
+    type(sphere_array_case_t), intent(in) :: case
+    real(wp) :: x(3), limit
+    integer :: last
+    last = size(result%history, 2)
+    if (m <= 2 .or. last < 3) return
+    x = -matmul(case%rotation_axis / norm2(case%rotation_axis), result%history(3:5, last - 2:last)) / &
+        (8.0_wp * acos(-1.0_wp) * result%dynamic_viscosity * result%radius**3 * result%angular_speed)
+    limit = x(3)
+    if (abs((x(3) - x(2)) - (x(2) - x(1))) > 0) limit = x(3) - (x(3) - x(2))**2 / ((x(3) - x(2)) - (x(2) - x(1)))
+    print '(a,3(i0,a,f9.6,a),a,f9.6,a)', '|   | coefficient at steps ', nint(result%history(1, last - 2)), ': ', x(1), &
+        ', ', nint(result%history(1, last - 1)), ': ', x(2), ', ', nint(result%history(1, last)), ': ', x(3), &
+        ';', ' Aitken limit ', limit, ' |'
+  end subroutine print_tail
 
   !> The box correction carried from a coarse grid to a fine one (docs/validation.md, rung 6),
   !> spheroid-transfer[:thin cells[:shape[:motion]]], default 8.8 cells, both shapes, all four motions.
