@@ -29,7 +29,7 @@ program bench_immersed_ladder
   use spheroid, only: make_spheroid, spheroid_t
   implicit none
   character(len=8), parameter :: couplings(2) = [character(len=8) :: 'implicit', 'explicit']
-  character(len=64) :: argument
+  character(len=256) :: argument
   integer :: a
 
   call parallel_start()
