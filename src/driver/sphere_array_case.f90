@@ -70,6 +70,7 @@ module sphere_array_case
     real(wp) :: rotation_axis(3) = [0.0_wp, 0.0_wp, 1.0_wp]   !< direction of Omega (rotating)
     integer :: aitken_window = 0                 !< steps between the samples of U (0: run to steady)
     real(wp) :: aitken_tolerance = 1.0e-6_wp     !< relative change of successive Aitken estimates
+    integer :: history_every = 0                 !< record U and the torques every this many steps (0: none)
   end type sphere_array_case_t
 
   type :: sphere_array_result_t
@@ -94,6 +95,10 @@ module sphere_array_case
     real(wp) :: slip = 0                   !< last re-imposition's largest change / velocity scale
     real(wp) :: divergence = 0             !< 1/s, cut-cell divergence after the last re-imposition
     real(wp) :: wall_seconds = 0
+    !> (8, samples): step, U (m/s), momentum torque (3, N m), face-sum torque (3, N m), every
+    !> history_every steps: the torque's approach to steady state (the translating body's torque
+    !> follows U quasi-steadily once the diffusive modes have decayed, so T/U settles before U does)
+    real(wp), allocatable :: history(:, :)
   end type sphere_array_result_t
 
   ! Water-like units, a 1 mm cell; the drive makes U about 1e-7 m/s: Re = U D / nu below 1e-4.
@@ -113,7 +118,7 @@ contains
     type(ibm_settings_t) :: settings
     real(wp) :: radius, dt, u_old, u_new, t0, sweeps_total, drive_x, axis(3), turn(3)
     real(wp) :: samples(3), estimate, previous_estimate, scale, lengths(3), force_drive
-    integer :: step, counts(3)
+    integer :: step, counts(3), samples_recorded
 
     t0 = wall_time()
     counts = case%cells
@@ -161,6 +166,8 @@ contains
     samples = 0
     previous_estimate = 0
     scale = 1
+    samples_recorded = 0
+    if (case%history_every > 0) allocate(result%history(8, case%max_steps / case%history_every))
     do step = 1, case%max_steps
       call immersed_step(scene, solver, dt)
       result%max_sweeps = max(result%max_sweeps, scene%predicted%sweeps)
@@ -172,6 +179,14 @@ contains
                 real(solver%grid%ny * solver%grid%nz, wp)
       end if
       result%steps = step
+      if (case%history_every > 0) then
+        if (mod(step, case%history_every) == 0) then
+          samples_recorded = samples_recorded + 1
+          result%history(:, samples_recorded) = [real(step, wp), global_sum(sum(solver%u(solver%grid%nx, &
+              1:solver%grid%ny, 1:solver%grid%nz_local))) / real(solver%grid%ny * solver%grid%nz, wp), &
+              scene%torque(:, 1), scene%surface_torque(:, 1)]
+        end if
+      end if
       if (step > 10 .and. abs(u_new - u_old) <= case%steady_tolerance * abs(u_new)) then
         result%steady = .true.
         exit
@@ -211,6 +226,7 @@ contains
     result%slip = scene%projected%largest_change
     result%divergence = scene%divergence
     result%wall_seconds = wall_time() - t0
+    if (case%history_every > 0) result%history = result%history(:, :samples_recorded)
   end subroutine run_sphere_array
 
   !> Least-squares fit of y = sum_k coefficients(k) x**powers(k) through the samples (x, y), at least

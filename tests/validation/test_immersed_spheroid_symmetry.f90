@@ -5,7 +5,8 @@
 !> stay below 1e-9 F r over 300 steps of the driven flow (F = f L^3, r the volume-equivalent radius),
 !> while the same bodies at a sub-cell offset (whose sampling is not mirror-symmetric) develop a
 !> torque that is printed (the steady values are in docs/validation.md, rung 6). The turning case
-!> (rotating about the axis) is checked the same way: the torque has no component across Omega.
+!> (rotating about the axis) is checked the same way: the torque has no component across Omega; its
+!> torque history (history_every) holds the run's final torque as its last sample.
 !> (A disk turned edgewise to the drive by the quaternion of a quarter turn gives 2e-9 F r instead:
 !> ghost nodes on its mid-plane near the rim have two equidistant closest points, and the rotation's
 !> round-off, 6e-17 in cos(pi/2), picks one of them differently for mirror nodes.)
@@ -52,6 +53,7 @@ contains
     case%rotating = rotating
     case%rotation_axis = axis
     case%offset_cells = 0
+    if (rotating) case%history_every = 100
     call run_sphere_array(case, result)
     if (rotating) then
       along = dot_product(result%torque, axis)
@@ -60,6 +62,17 @@ contains
           '; torque along Omega (N m) ', along
       call check(along < 0, trim(label)//'_torque_opposes_rotation')
       call check_below(ratio, 1.0e-9_wp, trim(label)//'_centred_no_torque_across_omega')
+      ! The torque history: a sample every 100 steps, the last one the run's final torque (no Aitken
+      ! scaling for a rotation), the first larger in magnitude (after the impulsive start the torque
+      ! falls towards its steady value as the vorticity diffuses out).
+      call check(size(result%history, 2) == 3, trim(label)//'_history_three_samples')
+      if (size(result%history, 2) == 3) then
+        call check_close(result%history(1, 3), 300.0_wp, 1.0e-12_wp, trim(label)//'_history_last_step')
+        call check_close(dot_product(result%history(3:5, 3), axis), along, 1.0e-12_wp, &
+                         trim(label)//'_history_last_torque_is_final')
+        call check_above(abs(dot_product(result%history(3:5, 1), axis)), abs(along), &
+                         trim(label)//'_history_torque_falls_after_start')
+      end if
     else
       ratio = norm2(result%torque) / (result%drive(1) * result%radius)
       print '(a,a,es10.3)', trim(label), ': torque/(F r), centred ', ratio

@@ -17,7 +17,9 @@
 !>   Oberbeck/Perrin (rung 6); spheroid-transfer[:thin cells[:shape[:motion]]]: the box correction
 !>   fitted on four boxes at 4.4 cells thin and carried to one box at the finer grid;
 !>   spheroid-symmetry[:thin cells[:shape]]: torque of a translating needle and disk at the paper's
-!>   thin-dimension resolution in tight boxes; spheroid:shape:motion:thin:box:scheme:nu dt/dx^2: one run.
+!>   thin-dimension resolution in tight boxes; spheroid-offsets[:thin cells[:shape[:motion[:count...]]]]:
+!>   that torque over sub-cell offsets, momentum balance and face sum side by side;
+!>   spheroid:shape:motion:thin:box:scheme:nu dt/dx^2: one run.
 program bench_immersed_ladder
   use agglo_kinds, only: wp
   use parallel_env, only: parallel_start, parallel_stop, is_root
@@ -27,7 +29,7 @@ program bench_immersed_ladder
   use spheroid, only: make_spheroid, spheroid_t
   implicit none
   character(len=8), parameter :: couplings(2) = [character(len=8) :: 'implicit', 'explicit']
-  character(len=64) :: argument
+  character(len=256) :: argument
   integer :: a
 
   call parallel_start()
@@ -39,6 +41,9 @@ program bench_immersed_ladder
     call run_section('spheroids')
     call run_section('spheroids:6')
     call run_section('spheroid-symmetry')
+    call run_section('spheroid-offsets')
+    call run_section('spheroid-offsets:15:needle::4:crank_nicolson:5')
+    call run_section('spheroid-offsets:8.8:disk::4:crank_nicolson:5')
     call run_section('spheroid-transfer')
   else
     do a = 1, command_argument_count()
@@ -62,7 +67,7 @@ contains
     only_coupling = ''
     if (first > 0) name = spec(:first - 1)
     if (first > 0 .and. trim(name) /= 'spheroid' .and. trim(name) /= 'spheroid-transfer' .and. &
-        trim(name) /= 'spheroid-symmetry') then
+        trim(name) /= 'spheroid-symmetry' .and. trim(name) /= 'spheroid-offsets') then
       second = index(spec(first + 1:), ':')
       if (second > 0) then
         only_coupling = spec(first + second + 1:)
@@ -97,11 +102,14 @@ contains
       call spheroid_transfer(spec)
     case ('spheroid-symmetry')
       call spheroid_symmetry(spec)
+    case ('spheroid-offsets')
+      call spheroid_offsets(spec)
     case default
       if (is_root()) print '(a)', 'bench_immersed_ladder: unknown section '''//trim(spec)// &
           '''; allowed: arrays, dilute, rotating, sweeps, spheroids (each optionally :D/dx:coupling; ' // &
           'for spheroids :thin cells:coupling), spheroid:shape:motion:thin cells:box cells:scheme:nu dt/dx^2, ' // &
-          'spheroid-transfer[:thin cells[:shape[:motion]]], spheroid-symmetry[:thin cells[:shape]]'
+          'spheroid-transfer[:thin cells[:shape[:motion]]], spheroid-symmetry[:thin cells[:shape]], ' // &
+          'spheroid-offsets[:thin cells[:shape[:motion[:count[:scheme[:nu dt/dx^2[:level]]]]]]]'
       error stop 1
     end select
   end subroutine run_section
@@ -342,18 +350,22 @@ contains
     end if
   end subroutine spheroid_coefficient
 
-  !> One spheroid run, spheroid:shape:motion:thin cells:box cells:scheme:nu dt/dx^2[:offset[:nx:ny:nz]],
+  !> One spheroid run,
+  !> spheroid:shape:motion:thin cells:box cells:scheme:nu dt/dx^2[:offset[:nx:ny:nz[:level[:steady tolerance]]]],
   !> motion one of along, across, about, tumble (rotate across the axis), scheme explicit or
   !> crank_nicolson; offset 'centred' puts the centre on a grid symmetry point, 'offset' (default) at
-  !> the ladder's sub-cell offset; nx:ny:nz a non-cubic box at the spacing of the box cells^3.
+  !> the ladder's sub-cell offset, or ox,oy,oz in cells; nx:ny:nz a non-cubic box at the spacing of
+  !> the box cells^3 (0:0:0 the cubic box); level the icosphere level of a face-sum torque printed
+  !> beside the momentum one (translations; empty: none); steady tolerance the relative change per step
+  !> that stops the run (default 1e-7), which also prints the approach of the coefficient (print_tail).
   subroutine spheroid_single(spec)
     character(len=*), intent(in) :: spec
     character(len=*), parameter :: motion_names(4) = [character(len=6) :: 'along', 'across', 'about', 'tumble']
-    character(len=32) :: fields(11)
+    character(len=32) :: fields(13)
     type(sphere_array_case_t) :: case
     type(sphere_array_result_t) :: result
     type(spheroid_t) :: unit_shape
-    real(wp) :: thin, number, coefficient, torque_ratio, reference(4)
+    real(wp) :: thin, number, coefficient, torque_ratio, reference(4), surface_ratio
     integer :: box_cells(3)
     character(len=32) :: box_label
     integer :: n, m, cells, status(6)
@@ -380,9 +392,38 @@ contains
     box_cells = case%box_cells
     case = spheroid_case(fields(2), m, thin, cells, fields(6), number)
     case%box_cells = box_cells
-    if (n >= 8 .and. trim(fields(8)) == 'centred') case%offset_cells = 0
+    if (n >= 8) then
+      if (trim(fields(8)) == 'centred') then
+        case%offset_cells = 0
+      else if (trim(fields(8)) /= 'offset' .and. len_trim(fields(8)) > 0) then
+        read(fields(8), *, iostat=status(1)) case%offset_cells
+        if (status(1) /= 0) then
+          if (is_root()) print '(a)', 'bench_immersed_ladder: '''//trim(spec)//''': the offset is centred, offset ' // &
+              'or three numbers ox,oy,oz (cells)'
+          error stop 1
+        end if
+      end if
+    end if
+    if (n >= 13) then
+      read(fields(13), *, iostat=status(1)) case%steady_tolerance
+      if (status(1) /= 0 .or. case%steady_tolerance <= 0) then
+        if (is_root()) print '(a)', 'bench_immersed_ladder: '''//trim(spec)//''': the steady tolerance is a number > 0'
+        error stop 1
+      end if
+      case%history_every = 10
+    end if
+    if (n >= 12 .and. len_trim(fields(12)) > 0) then
+      read(fields(12), *, iostat=status(1)) case%surface_level
+      if (status(1) /= 0 .or. case%surface_level < 0) then
+        if (is_root()) print '(a)', 'bench_immersed_ladder: '''//trim(spec)//''': the surface level is an icosphere ' // &
+            'level >= 0'
+        error stop 1
+      end if
+    end if
     call run_sphere_array(case, result)
     call spheroid_coefficient(result, m, case, coefficient, torque_ratio)
+    surface_ratio = 0
+    if (m <= 2) surface_ratio = norm2(result%surface_torque) / (result%drive(1) * result%radius)
     unit_shape = make_spheroid(trim(fields(2)), 1.0_wp, 1.0_wp)
     reference = spheroid_resistance_coefficients(unit_shape%a, unit_shape%b)
     write(box_label, '(i0,a)') cells, '^3'
@@ -393,7 +434,33 @@ contains
         number, ' | ', result%diameter_cells / 2, &
         ' | ', result%radius_over_box, ' | ', coefficient, ' | ', reference(m), ' | ', torque_ratio, ' | ', &
         result%steps, ' | ', result%mean_sweeps, ' | ', result%wall_seconds, merge(' |         ', ' unsteady |', result%steady)
+    if (is_root() .and. case%surface_level >= 0 .and. m <= 2) print '(a,i0,a,es8.1)', &
+        '|   | face-sum torque/(F r), icosphere level ', case%surface_level, ': ', surface_ratio
+    ! With a steady tolerance given: the coefficient at the last samples 10 steps apart, and their
+    ! Aitken extrapolation (the slowest mode's geometric tail; a rotation's torque, or a
+    ! translation's torque over U).
+    if (is_root() .and. case%history_every > 0) call print_tail(result, m, case)
   end subroutine spheroid_single
+
+  !> The coefficient of a rotation (the torque about Omega) at the last three history samples and
+  !> the Aitken extrapolation of the geometric tail, x3 - (x3 - x2)^2 / ((x3 - x2) - (x2 - x1)): what
+  !> a run stopped at a loose steady tolerance still misses.
+  subroutine print_tail(result, m, case)
+    type(sphere_array_result_t), intent(in) :: result
+    integer, intent(in) :: m
+    type(sphere_array_case_t), intent(in) :: case
+    real(wp) :: x(3), limit
+    integer :: last
+    last = size(result%history, 2)
+    if (m <= 2 .or. last < 3) return
+    x = -matmul(case%rotation_axis / norm2(case%rotation_axis), result%history(3:5, last - 2:last)) / &
+        (8.0_wp * acos(-1.0_wp) * result%dynamic_viscosity * result%radius**3 * result%angular_speed)
+    limit = x(3)
+    if (abs((x(3) - x(2)) - (x(2) - x(1))) > 0) limit = x(3) - (x(3) - x(2))**2 / ((x(3) - x(2)) - (x(2) - x(1)))
+    print '(a,3(i0,a,f9.6,a),a,f9.6,a)', '|   | coefficient at steps ', nint(result%history(1, last - 2)), ': ', x(1), &
+        ', ', nint(result%history(1, last - 1)), ': ', x(2), ', ', nint(result%history(1, last)), ': ', x(3), &
+        ';', ' Aitken limit ', limit, ' |'
+  end subroutine print_tail
 
   !> The box correction carried from a coarse grid to a fine one (docs/validation.md, rung 6),
   !> spheroid-transfer[:thin cells[:shape[:motion]]], default 8.8 cells, both shapes, all four motions.
@@ -403,7 +470,8 @@ contains
   !> 1959, J. Fluid Mech. 5, 317: the O(1/L) term of the lattice, shape-independent),
   !> y = y_inf + C3 (r/L)^3 + C5 (r/L)^5 for a rotation (the rotlet's periodic images turn the fluid
   !> at the body by -T/(6 mu L^3), the x^3 term; a stresslet adds to it). On the fine grid one box
-  !> at the r/L of the coarse 32^3 (32 thin/4.4 cells) and y_inf(fine) = y(fine) - [y_fit(r/L) - y_inf].
+  !> at about the r/L of the coarse 32^3 (32 thin/4.4 cells, rounded to an even count) and
+  !> y_inf(fine) = y(fine) - [y_fit(r/L) - y_inf].
   !> Crank-Nicolson at nu dt/dx^2 = 5 throughout (its steady-state shift is the same in every box:
   !> it cancels in the correction; it is measured against explicit diffusion in the docs). Also printed:
   !> y_inf from a line in (r/L)^3 through the three largest boxes, the fit's sensitivity.
@@ -428,7 +496,8 @@ contains
       if (is_root()) print '(a)', 'bench_immersed_ladder: '''//trim(spec)//''': thin cells is not a positive number'
       error stop 1
     end if
-    fine_box = nint(boxes(1) * thin / coarse_thin)
+    ! Even, like the coarse boxes (the body's centre is then a cell corner plus the offset in every box).
+    fine_box = 2 * nint(boxes(1) * thin / (2 * coarse_thin))
     if (is_root()) then
       print '(a)', '| shape | motion | thin cells | cells | r/L | raw coefficient | Oberbeck/Perrin | torque/(F r) | ' // &
           'steps | iterations mean | wall s |'
@@ -490,8 +559,7 @@ contains
     character(len=32) :: fields(3)
     type(sphere_array_case_t) :: case
     type(sphere_array_result_t) :: result
-    type(spheroid_t) :: unit_shape
-    real(wp) :: thin, only_thin, half(3), coefficient, torque_ratio
+    real(wp) :: thin, only_thin, coefficient, torque_ratio
     integer :: n, s, m, status
     call split_fields(spec, fields, n)
     only_thin = 0
@@ -508,13 +576,8 @@ contains
     do s = 1, size(shapes)
       if (n >= 3 .and. len_trim(fields(3)) > 0 .and. trim(fields(3)) /= trim(shapes(s))) cycle
       thin = merge(paper_thin(s), only_thin, only_thin <= 0)
-      unit_shape = make_spheroid(trim(shapes(s)), 1.0_wp, 1.0_wp)
       do m = 1, 2
-        case = spheroid_case(shapes(s), m, thin, 32, 'explicit', 0.06_wp)
-        ! Half extents in cells along x, y, z of the body's axis along x (m = 1) or y (m = 2).
-        half = case%radius_cells * unit_shape%b
-        half(m) = case%radius_cells * unit_shape%a
-        case%box_cells = 2 * nint(half) + 8
+        case = tight_box_case(shapes(s), m, thin, 'explicit', 0.06_wp)
         call run_sphere_array(case, result)
         call spheroid_coefficient(result, m, case, coefficient, torque_ratio)
         if (is_root()) print '(a,a,a,a,a,f5.2,a,i0,a,i0,a,i0,a,es8.1,a,i0,a,f7.1,a,a)', '| ', trim(shapes(s)), ' | ', &
@@ -525,6 +588,113 @@ contains
     end do
     if (is_root()) print '(a)', ''
   end subroutine spheroid_symmetry
+
+  !> The translating spheroid (m = 1 axis along the drive, 2 across) in the tight box of the
+  !> symmetry checks: 2 nint(half extent) + 8 cells along each axis, the sub-cell offset of the ladder.
+  type(sphere_array_case_t) function tight_box_case(shape, m, thin, scheme, number) result(case)
+    character(len=*), intent(in) :: shape, scheme
+    integer, intent(in) :: m
+    real(wp), intent(in) :: thin, number
+    type(spheroid_t) :: unit_shape
+    real(wp) :: half(3)
+    unit_shape = make_spheroid(trim(shape), 1.0_wp, 1.0_wp)
+    case = spheroid_case(shape, m, thin, 32, scheme, number)
+    ! Half extents in cells along x, y, z of the body's axis along x (m = 1) or y (m = 2).
+    half = case%radius_cells * unit_shape%b
+    half(m) = case%radius_cells * unit_shape%a
+    case%box_cells = 2 * nint(half) + 8
+  end function tight_box_case
+
+  !> The torque of a translating needle and disk over sub-cell offsets (docs/validation.md, rung 6),
+  !> spheroid-offsets[:thin cells[:shape[:motion[:count[:scheme[:nu dt/dx^2[:level]]]]]]], defaults
+  !> 4.4 cells, both shapes, along and across, 8 offsets, explicit, 0.06, icosphere level 2. The
+  !> offsets are the first `count` points of the R3 low-discrepancy sequence (Roberts 2018: the
+  !> fractional parts of 1/2 + k (1/g, 1/g^2, 1/g^3), g^4 = g + 1) minus 1/2, spread evenly over the
+  !> cell; the tight box of spheroid-symmetry. Per offset the momentum-balance and the face-sum
+  !> torque over F r and the relative change of T/U over the last sampling window (the steadiness
+  !> of the torque); per case their median, root mean square and largest value.
+  subroutine spheroid_offsets(spec)
+    character(len=*), intent(in) :: spec
+    character(len=*), parameter :: motion_names(2) = [character(len=6) :: 'along', 'across']
+    character(len=8), parameter :: shapes(2) = [character(len=8) :: 'needle', 'disk']
+    real(wp), parameter :: plastic = 1.22074408460575947536_wp
+    character(len=32) :: fields(8), scheme
+    type(sphere_array_case_t) :: case
+    type(sphere_array_result_t) :: result
+    real(wp) :: thin, number, coefficient, alpha(3), drift
+    real(wp), allocatable :: momentum(:), surface(:)
+    integer :: n, s, m, k, count, level, last, status(4)
+    call split_fields(spec, fields, n)
+    thin = 4.4_wp; count = 8; scheme = 'explicit'; number = 0.06_wp; level = 2
+    status = 0
+    if (n >= 2 .and. len_trim(fields(2)) > 0) read(fields(2), *, iostat=status(1)) thin
+    if (n >= 5 .and. len_trim(fields(5)) > 0) read(fields(5), *, iostat=status(2)) count
+    if (n >= 6 .and. len_trim(fields(6)) > 0) scheme = fields(6)
+    if (n >= 7 .and. len_trim(fields(7)) > 0) read(fields(7), *, iostat=status(3)) number
+    if (n >= 8 .and. len_trim(fields(8)) > 0) read(fields(8), *, iostat=status(4)) level
+    if (any(status /= 0) .or. thin <= 0 .or. count < 1 .or. number <= 0 .or. level < 0 .or. &
+        (trim(scheme) /= 'explicit' .and. trim(scheme) /= 'crank_nicolson')) then
+      if (is_root()) print '(a)', 'bench_immersed_ladder: '''//trim(spec)//''': expected spheroid-offsets' // &
+          '[:thin cells > 0[:needle|disk[:along|across[:count >= 1[:explicit|crank_nicolson[:nu dt/dx^2 > 0' // &
+          '[:icosphere level >= 0]]]]]]]'
+      error stop 1
+    end if
+    alpha = [1.0_wp / plastic, 1.0_wp / plastic**2, 1.0_wp / plastic**3]
+    allocate(momentum(count), surface(count))
+    if (is_root()) then
+      print '(a)', '| shape | motion | thin cells | box cells | offset (cells) | torque/(F r) momentum | ' // &
+          'torque/(F r) face sum | T/U change, last window | steps | wall s |'
+      print '(a)', '|---|---|---|---|---|---|---|---|---|---|'
+    end if
+    do s = 1, size(shapes)
+      if (n >= 3 .and. len_trim(fields(3)) > 0 .and. trim(fields(3)) /= trim(shapes(s))) cycle
+      do m = 1, size(motion_names)
+        if (n >= 4 .and. len_trim(fields(4)) > 0 .and. trim(fields(4)) /= trim(motion_names(m))) cycle
+        do k = 1, count
+          case = tight_box_case(shapes(s), m, thin, scheme, number)
+          case%offset_cells = modulo(0.5_wp + k * alpha, 1.0_wp) - 0.5_wp
+          case%surface_level = level
+          case%history_every = case%aitken_window
+          call run_sphere_array(case, result)
+          call spheroid_coefficient(result, m, case, coefficient, momentum(k))
+          surface(k) = norm2(result%surface_torque) / (result%drive(1) * result%radius)
+          drift = 0
+          last = size(result%history, 2)
+          if (last >= 2) drift = abs(norm2(result%history(3:5, last)) / result%history(2, last) / &
+                                     (norm2(result%history(3:5, last - 1)) / result%history(2, last - 1)) - 1)
+          if (is_root()) print '(a,a,a,a,a,f5.2,a,i0,a,i0,a,i0,a,3f6.2,a,es8.1,a,es8.1,a,es8.1,a,i0,a,f7.1,a,a)', &
+              '| ', trim(shapes(s)), ' | ', trim(motion_names(m)), ' | ', thin, ' | ', case%box_cells(1), 'x', &
+              case%box_cells(2), 'x', case%box_cells(3), ' | ', case%offset_cells, ' | ', momentum(k), ' | ', &
+              surface(k), ' | ', drift, ' | ', result%steps, ' | ', result%wall_seconds, &
+              merge(' |         ', ' unsteady |', result%steady)
+        end do
+        if (is_root()) print '(a,a,a,a,a,i0,a,3es9.2,a,3es9.2,a)', '|   | ', trim(shapes(s)), ', ', &
+            trim(motion_names(m)), ': over ', count, ' offsets, median, rms, largest: momentum ', &
+            median(momentum), sqrt(sum(momentum**2) / count), maxval(momentum), '; face sum ', median(surface), &
+            sqrt(sum(surface**2) / count), maxval(surface), ' |'
+      end do
+    end do
+    if (is_root()) print '(a)', ''
+  end subroutine spheroid_offsets
+
+  !> The median of a few values (insertion sort of a copy).
+  real(wp) function median(values)
+    real(wp), intent(in) :: values(:)
+    real(wp) :: sorted(size(values)), key
+    integer :: i, j
+    sorted = values
+    do i = 2, size(sorted)
+      key = sorted(i)
+      j = i - 1
+      do while (j >= 1)
+        if (sorted(j) <= key) exit
+        sorted(j + 1) = sorted(j)
+        j = j - 1
+      end do
+      sorted(j + 1) = key
+    end do
+    median = 0.5_wp * (sorted((size(sorted) + 1) / 2) + sorted(size(sorted) / 2 + 1))
+  end function median
 
   !> The colon-separated fields of spec.
   subroutine split_fields(spec, fields, n)
