@@ -3,13 +3,21 @@ module sample_statistics
   use agglo_kinds, only: wp
   implicit none
   private
-  public :: median
+  public :: median, sorted_values
 
 contains
 
-  !> The median (for an even count the lower of the two middle values), by insertion sort: the
-  !> samples are a few dozen repetitions at most.
+  !> The median (for an even count the lower of the two middle values).
   real(wp) function median(values)
+    real(wp), intent(in) :: values(:)
+    real(wp) :: sorted(size(values))
+    sorted = sorted_values(values)
+    median = sorted((size(sorted) + 1) / 2)
+  end function median
+
+  !> A copy of values in ascending order, by insertion sort: the samples are a few dozen
+  !> repetitions at most.
+  pure function sorted_values(values) result(sorted)
     real(wp), intent(in) :: values(:)
     real(wp) :: sorted(size(values)), held
     integer :: i, j
@@ -22,6 +30,5 @@ contains
       end do
       sorted(j + 1) = held
     end do
-    median = sorted((size(sorted) + 1) / 2)
-  end function median
+  end function sorted_values
 end module sample_statistics

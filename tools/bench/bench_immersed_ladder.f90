@@ -22,6 +22,7 @@
 !>   spheroid:shape:motion:thin:box:scheme:nu dt/dx^2: one run.
 program bench_immersed_ladder
   use agglo_kinds, only: wp
+  use sample_statistics, only: sorted_values
   use parallel_env, only: parallel_start, parallel_stop, is_root
   use sphere_array_case, only: sphere_array_case_t, sphere_array_result_t, run_sphere_array, fit_power_series
   use immersed_sweep_survey, only: sweep_survey_t, run_sweep_survey
@@ -677,22 +678,11 @@ contains
     if (is_root()) print '(a)', ''
   end subroutine spheroid_offsets
 
-  !> The median of a few values (insertion sort of a copy).
+  !> The median of a few values (for an even count the mean of the two middle values).
   real(wp) function median(values)
     real(wp), intent(in) :: values(:)
-    real(wp) :: sorted(size(values)), key
-    integer :: i, j
-    sorted = values
-    do i = 2, size(sorted)
-      key = sorted(i)
-      j = i - 1
-      do while (j >= 1)
-        if (sorted(j) <= key) exit
-        sorted(j + 1) = sorted(j)
-        j = j - 1
-      end do
-      sorted(j + 1) = key
-    end do
+    real(wp) :: sorted(size(values))
+    sorted = sorted_values(values)
     median = 0.5_wp * (sorted((size(sorted) + 1) / 2) + sorted(size(sorted) / 2 + 1))
   end function median
 
