@@ -119,7 +119,7 @@ contains
       call fatal('spheroid squeeze: gap_cells = '//real_text(case%gap_cells)//'; allowed: > 0 (cells)')
     result%cells = case%cells
     if (any(case%cells <= 0)) result%cells = spheroid_squeeze_box(case%configuration, case%radius_cells)
-    call squeeze_fluid(result%cells, solver, lengths)
+    call squeeze_fluid(result%cells, solver, lengths, case%run%pressure_scheme)
 
     h = solver%grid%dx
     radius = case%radius_cells * h

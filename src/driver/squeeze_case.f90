@@ -61,6 +61,9 @@ module squeeze_case
     real(wp) :: steady_tolerance = 1.0e-7_wp     !< relative change of the force per step at steady state
     integer :: max_steps = 20000
     real(wp) :: offset_cells(3) = [0.31_wp, 0.13_wp, 0.27_wp]   !< gap centre - box centre, cells
+    !> 'incremental' (the calibrated squeeze tables) or 'non_incremental' (the decks' default): flat
+    !> faces a cell or less apart grow without bound with the incremental pressure only (docs/theory.md).
+    character(len=16) :: pressure_scheme = 'incremental'
   end type squeeze_case_t
 
   type :: squeeze_result_t
@@ -137,11 +140,13 @@ contains
   end function brenner_squeeze_coefficient
 
   !> The fluid of the squeeze cases at rest: cells(1) x cells(2) x cells(3) cells, the x length the
-  !> 1 mm box, lengths (m) the three box lengths (cubic cells); explicit diffusion, incremental pressure.
-  subroutine squeeze_fluid(cells, solver, lengths)
+  !> 1 mm box, lengths (m) the three box lengths (cubic cells); explicit diffusion, pressure_scheme
+  !> (fluid_solver) when present, else the incremental pressure.
+  subroutine squeeze_fluid(cells, solver, lengths, pressure_scheme)
     integer, intent(in) :: cells(3)
     type(fluid_solver_t), intent(out) :: solver
     real(wp), intent(out) :: lengths(3)
+    character(len=*), intent(in), optional :: pressure_scheme
     type(grid_config_t) :: grid_cfg
     type(fluid_config_t) :: fluid_cfg
     lengths = box * real(cells, wp) / cells(1)
@@ -151,6 +156,7 @@ contains
     fluid_cfg%viscosity = viscosity
     fluid_cfg%viscous_scheme = 'explicit'
     fluid_cfg%pressure_scheme = 'incremental'
+    if (present(pressure_scheme)) fluid_cfg%pressure_scheme = pressure_scheme
     call fluid_solver_create(solver, grid_cfg, fluid_cfg)
     solver%u = 0; solver%v = 0; solver%w = 0; solver%pressure = 0
   end subroutine squeeze_fluid
@@ -165,7 +171,8 @@ contains
     integer :: n
 
     t0 = wall_time()
-    call squeeze_fluid([2 * case%width_cells, case%width_cells, case%width_cells], solver, lengths)
+    call squeeze_fluid([2 * case%width_cells, case%width_cells, case%width_cells], solver, lengths, &
+                       case%pressure_scheme)
 
     h = solver%grid%dx
     radius = 0.5_wp * case%diameter_cells * h
