@@ -56,6 +56,8 @@ module settling_sphere_case
     integer :: substeps = 4                      !< particle sub-steps per fluid step
     real(wp) :: viscous_number = 0.06_wp         !< nu dt / dx^2
     character(len=16) :: viscous_scheme = 'explicit'   !< &fluid viscous_scheme: 'explicit' | 'crank_nicolson'
+    !> &fluid pressure_scheme: 'incremental' (the ladder's) or 'non_incremental' (the decks' default)
+    character(len=16) :: pressure_scheme = 'incremental'
     real(wp) :: steady_tolerance = 1.0e-8_wp
     integer :: max_steps = 20000
     real(wp) :: offset_cells(3) = [0.13_wp, 0.27_wp, 0.41_wp]   !< sphere centre - box centre, cells
@@ -121,7 +123,7 @@ contains
     fluid_cfg%density = density
     fluid_cfg%viscosity = viscosity
     fluid_cfg%viscous_scheme = case%viscous_scheme
-    fluid_cfg%pressure_scheme = 'incremental'
+    fluid_cfg%pressure_scheme = case%pressure_scheme
     call fluid_solver_create(solver, grid_cfg, fluid_cfg)
     solver%u = 0; solver%v = 0; solver%w = 0; solver%pressure = 0
     nz = solver%grid%nz_local

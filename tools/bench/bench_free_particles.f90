@@ -1,11 +1,12 @@
 !> Free particles resolved by the immersed boundary (make validate; docs/validation.md, "Free
 !> particles"). Sections (command-line arguments; none runs all three):
-!> - sphere: a sphere settling in the periodic cube (module settling_sphere_case) at D/dx about
+!> - sphere [pressure_scheme]: a sphere settling in the periodic cube (module settling_sphere_case) at D/dx about
 !>   8, 12 and 16 (phi = 0.125), its drag coefficient K = W / (6 pi mu a U_s) against Zick & Homsy
 !>   (1982, J. Fluid Mech. 115, 13, Table 2: K = 4.292) and against the fixed sphere of the same cell
 !>   (docs/validation.md, "Immersed boundary": 4.2794, 4.2884, 4.2802); then at D/dx 8 the density
 !>   ratios 2.72, 1.1, 0.5 and 0.3 (a buoyant sphere rises; at 1 there is no net weight) with and
-!>   without the added-mass stabilisation.
+!>   without the added-mass stabilisation. pressure_scheme (default 'incremental', the ladder's):
+!>   'non_incremental', the resolved decks' default, runs the three resolutions only.
 !> - spheroids [thin_cells cells_1 [cells_2 [cells_3]]]: a needle and a disk (aspect 5) settling
 !>   with the axis at 45 degrees from gravity, thinnest dimension thin_cells (default 4.4) in the
 !>   boxes cells_i^3 (default 32, 40, 48): the body-frame mobilities, extrapolated in the box size
@@ -82,15 +83,21 @@ contains
     type(settling_result_t) :: result
     integer :: d, r, s
     logical :: stabilise
+    character(len=16) :: pressure_scheme
+    ! Optional second argument: the pressure scheme of the three resolutions (default the ladder's).
+    pressure_scheme = 'incremental'
+    if (command_argument_count() >= 2) call get_command_argument(2, pressure_scheme)
     if (is_root()) then
+      print '(a)', 'pressure_scheme '//trim(pressure_scheme)
       print '(a)', '| cells | D/dx | rho_p/rho_f | stabilised | K | vs Z&H | vs fixed sphere | momentum | steps | wall s |'
       print '(a)', '|---|---|---|---|---|---|---|---|---|---|'
     end if
     do d = 1, size(cells)
-      case = settling_case_t(cells=cells(d), max_steps=40000)
+      case = settling_case_t(cells=cells(d), max_steps=40000, pressure_scheme=pressure_scheme)
       call run_settling_sphere(case, result)
       call print_sphere_row(case, result, fixed(d))
     end do
+    if (trim(pressure_scheme) /= 'incremental') return   ! the density ratios with the ladder's scheme only
     do r = 1, size(ratios)
       do s = 1, 2   ! with, then without the stabilisation
         stabilise = s == 1
