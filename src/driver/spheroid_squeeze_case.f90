@@ -25,6 +25,7 @@ module spheroid_squeeze_case
   use physical_constants, only: pi
   use wall_clock, only: wall_time
   use error_handling, only: fatal
+  use text_format, only: real_text
   use fluid_solver, only: fluid_solver_t
   use spheroid, only: make_spheroid
   use quaternion, only: quaternion_normalise
@@ -183,10 +184,4 @@ contains
     shape = 'needle'
     if (configuration == 'face' .or. configuration == 'edge') shape = 'disk'
   end function shape_of
-
-  function real_text(value) result(text)
-    real(wp), intent(in) :: value
-    character(len=16) :: text
-    write(text, '(g0.4)') value
-  end function real_text
 end module spheroid_squeeze_case
