@@ -14,8 +14,9 @@
 !>     so that the result does not depend on the ranks' ordering: 1 and 2 ranks agree to round-off.
 !>     Stencil corners on another rank are read from copies of the neighbours' planes, exchanged
 !>     whole before the first sweep; when any stencil reaches a ghost node of another rank, only the
-!>     ghost values in those planes (the only values a sweep changes) travel before each further
-!>     sweep (ghost_traffic_t: the same copies as a whole exchange, at a fraction of the traffic).
+!>     ghost values in those planes (the only values a sweep changes) travel after each sweep, in
+!>     one gather with every rank's largest change (ghost_exchange_t: the same copies as a whole
+!>     exchange and the same residual as a reduction, at one collective per sweep).
 !>   - coupling 'explicit' (image point 'image', d_M = max(d_G, 1.5 h)): one evaluation of the row
 !>     (G's own weight, where the stencil still holds G, on the diagonal as above).
 !> - Loads by momentum balance (ibm-notes section 8.2): each imposition changes the momentum on the
@@ -35,21 +36,21 @@
 !>   nodes changing status and the load jumps they cause are counted (status_change_report_t).
 module immersed_boundary
   use, intrinsic :: iso_fortran_env, only: int8, int64
-  use mpi_f08, only: MPI_Sendrecv, MPI_Allreduce, MPI_IN_PLACE, MPI_SUM, MPI_MAX, MPI_LOR, MPI_LOGICAL, MPI_INTEGER, &
-                     MPI_STATUS_IGNORE
+  use mpi_f08, only: MPI_Sendrecv, MPI_Allreduce, MPI_Allgather, MPI_Allgatherv, MPI_IN_PLACE, MPI_SUM, MPI_MAX, &
+                     MPI_INTEGER, MPI_STATUS_IGNORE
   use agglo_kinds, only: wp
   use error_handling, only: fatal
-  use parallel_env, only: world, mpi_wp, global_max
+  use parallel_env, only: world, mpi_wp, global_max, n_ranks
   use periodic_box, only: minimum_image
   use fluid_grid, only: fluid_grid_t
   use halo_exchange, only: exchange_slab_halos
   use immersed_geometry, only: immersed_body_t, immersed_options_t, immersed_geometry_t, component_nodes_t, &
-                               classify_nodes, node_position, node_ghost, node_fluid
+                               classify_nodes, node_position, node_ghost, node_fluid, fallback_count, saturated_count
   implicit none
   private
   public :: immersed_boundary_t, ibm_settings_t, imposition_report_t, status_change_report_t
   public :: ibm_set_bodies, ibm_impose, ibm_begin_step, ibm_step_loads, cell_divergence_max
-  public :: ibm_extend_pressure, status_change_summary
+  public :: ibm_extend_pressure, status_change_summary, ibm_fallback_rows
 
   !> A copy of the three components' status fields (the previous classification).
   type :: status_field_t
@@ -65,8 +66,20 @@ module immersed_boundary
   type :: ghost_traffic_t
     integer, allocatable :: outgoing(:, :)       !< (2, m): component, index in its ghost list
     integer, allocatable :: incoming(:, :)       !< (4, m): component, i, j, k in below | above
-    real(wp), allocatable :: send_values(:), receive_values(:)
   end type ghost_traffic_t
+
+  !> The traffic of the coupled (lockstep) sweeps, planned once per classification (the ghost lists
+  !> change only then; both impositions of a step use it): after each sweep ONE gather carries every
+  !> rank's block [largest change, values for the rank below, values for the rank above], so a sweep
+  !> costs one collective where the two neighbour exchanges and the residual's reduction took three
+  !> (each a wait for the slowest rank: the cost of a sweep on a shared machine is its waits).
+  type :: ghost_exchange_t
+    logical :: planned = .false.                 !< the plan belongs to the current classification
+    type(ghost_traffic_t) :: downward, upward    !< to the rank below (its above planes), to the rank above
+    integer, allocatable :: counts(:), displacements(:)   !< (n_ranks) blocks of the gather, 1 + down + up values
+    integer, allocatable :: down_counts(:)       !< (n_ranks) values each rank sends down
+    real(wp), allocatable :: send(:), receive(:) !< this rank's block, all blocks
+  end type ghost_exchange_t
 
   !> The rigid velocity and the load bookkeeping of one node, for a solver that imposes the body rows itself
   public :: rigid_velocity, account
@@ -94,7 +107,7 @@ module immersed_boundary
   !> What one imposition did (for the log).
   type :: imposition_report_t
     integer :: sweeps = 0               !< Jacobi sweeps (1 for the explicit coupling)
-    integer :: exchanges = 0            !< plane exchanges with the neighbouring ranks
+    integer :: exchanges = 0            !< plane exchanges and ghost-value gathers with the other ranks
     real(wp) :: residual = 0            !< largest ghost change in the last sweep / velocity scale
     real(wp) :: largest_change = 0      !< largest |u_imposed - u_before| over ghost and interior nodes / scale
     real(wp) :: velocity_scale = 0      !< m/s, the scale of residual and largest_change
@@ -136,7 +149,9 @@ module immersed_boundary
     integer :: halo_planes = 0           !< planes beyond the slab that the stencils reach (every component)
     logical :: remote_ghosts = .false.   !< some stencil (on some rank) holds a ghost node of another rank
     logical :: stencils_leave_slab = .true.   !< some stencil (on some rank) reaches beyond its rank's slab
+    type(ghost_exchange_t) :: exchange   !< the coupled sweeps' traffic (remote_ghosts), per classification
     real(wp), allocatable :: below(:, :, :, :), above(:, :, :, :)   !< copies of the neighbours' planes, per component
+    real(wp), allocatable :: plane_buffer(:, :, :, :)   !< this rank's planes of the three components, as sent
     type(lever_arms_t) :: arms(3)        !< per component, for the current placement
     real(wp), allocatable :: arm_centres(:, :)   !< (3, n) the centres the lever arms were computed for
     type(status_change_report_t) :: changes      !< status changes and load jumps (moving bodies)
@@ -157,7 +172,7 @@ contains
     real(wp), intent(in) :: velocity(:, :), angular_velocity(:, :)
     logical, intent(in) :: classify
     type(immersed_options_t) :: options
-    integer :: n, c, planes
+    integer :: n, c, planes, reach(2)
     logical :: remote
     character(len=200) :: text
     type(status_fields_t) :: previous
@@ -195,15 +210,18 @@ contains
       end do
     end if
     call classify_nodes(grid, bodies, options, ibm%geometry)
+    ibm%exchange%planned = .false.
     call count_status_changes(ibm, grid, previous)
-    planes = 0
-    remote = .false.
+    ! One reduction for both: the planes the stencils reach (largest) and whether any stencil
+    ! holds another rank's ghost node (as 0 / 1, the largest is the logical or).
+    reach = 0
     do c = 1, 3
-      planes = max(planes, ibm%geometry%component(c)%halo_planes_needed)
-      remote = remote .or. any_remote_ghost(ibm%geometry%component(c))
+      reach(1) = max(reach(1), ibm%geometry%component(c)%halo_planes_needed)
+      if (any_remote_ghost(ibm%geometry%component(c))) reach(2) = 1
     end do
-    call MPI_Allreduce(MPI_IN_PLACE, planes, 1, MPI_INTEGER, MPI_MAX, world)
-    call MPI_Allreduce(MPI_IN_PLACE, remote, 1, MPI_LOGICAL, MPI_LOR, world)
+    call MPI_Allreduce(MPI_IN_PLACE, reach, 2, MPI_INTEGER, MPI_MAX, world)
+    planes = reach(1)
+    remote = reach(2) > 0
     ibm%stencils_leave_slab = planes > 0
     planes = max(planes, 1)
     if (planes > grid%nz_local) then
@@ -572,7 +590,6 @@ contains
     real(wp), allocatable :: surface(:, :)  ! u_B of each ghost
     integer :: c, sweep, max_sweeps, n_max
     character(len=240) :: text
-    type(ghost_traffic_t) :: downward, upward   ! to the rank below (its above planes), to the rank above
 
     n_max = max(1, maxval([(ibm%geometry%component(c)%n_ghost, c = 1, 3)]))
     allocate(before(n_max, 3), surface(n_max, 3))
@@ -597,7 +614,7 @@ contains
     sweep = 0
     if (ibm%remote_ghosts .or. max_sweeps == 1) then
       ! Coupled across ranks: every sweep waits for the neighbours' ghost values and the global residual.
-      if (ibm%remote_ghosts .and. max_sweeps > 1) call plan_ghost_traffic(ibm, grid, downward, upward)
+      if (ibm%remote_ghosts .and. max_sweeps > 1 .and. .not. ibm%exchange%planned) call plan_ghost_traffic(ibm, grid)
       call lockstep_sweeps()
     else
       ! No stencil reads another rank's ghost nodes, so each rank's ghost rows are a system of their
@@ -640,19 +657,39 @@ contains
     end subroutine sweep_once
 
     !> Sweeps on every rank together until the global residual meets the tolerance or max_sweeps.
+    !> With ghost nodes coupled across ranks, one gather after each sweep brings the neighbours'
+    !> new ghost values (for the next sweep's stencils) and the largest change over all ranks: the
+    !> values and the residual of a neighbour exchange before the sweep plus a reduction after it,
+    !> so the sweeps, their count and every value are the same.
     subroutine lockstep_sweeps()
+      real(wp) :: largest
       do while (sweep < max_sweeps)
-        if (sweep > 0 .and. ibm%remote_ghosts) then
-          call exchange_ghost_values(ibm, grid, downward, upward, u, v, w)
-          report%exchanges = report%exchanges + 1
-        end if
         call sweep_once()
         report%sweeps = sweep
-        report%residual = global_max(limit) / report%velocity_scale
+        if (ibm%remote_ghosts .and. max_sweeps > 1) then
+          call gather_sweep_result(ibm, grid, u, v, w, limit, largest)
+          report%exchanges = report%exchanges + 1
+        else
+          largest = global_max(limit)
+        end if
+        report%residual = largest / report%velocity_scale
         if (report%residual <= ibm%settings%tolerance) exit
       end do
     end subroutine lockstep_sweeps
   end subroutine ibm_impose
+
+  !> Ghost rows over all ranks whose image point was moved back because another body is near
+  !> (fallback rows) and, among them, the saturated Couette rows (immersed_geometry), in one
+  !> reduction (collective).
+  subroutine ibm_fallback_rows(ibm, fallbacks, saturated)
+    type(immersed_boundary_t), intent(in) :: ibm
+    integer, intent(out) :: fallbacks, saturated
+    integer :: counts(2)
+    counts = [fallback_count(ibm%geometry), saturated_count(ibm%geometry)]
+    call MPI_Allreduce(MPI_IN_PLACE, counts, 2, MPI_INTEGER, MPI_SUM, world)
+    fallbacks = counts(1)
+    saturated = counts(2)
+  end subroutine ibm_fallback_rows
 
   !> The largest of an integer over the ranks (collective).
   integer function global_max_integer(local) result(largest)
@@ -847,132 +884,155 @@ contains
   end subroutine account
 
   !> Copy the planes the stencils reach beyond the slab from the neighbouring ranks (periodic;
-  !> with one rank the slab's own planes), for all three components.
+  !> with one rank the slab's own planes), for all three components: one message per direction
+  !> with the three components (plane_buffer), one wait instead of three.
   subroutine exchange_planes(ibm, grid, u, v, w)
     type(immersed_boundary_t), intent(inout) :: ibm
     type(fluid_grid_t), intent(in) :: grid
     real(wp), intent(in) :: u(0:, 0:, 0:), v(0:, 0:, 0:), w(0:, 0:, 0:)
-    call exchange_component(u, 1)
-    call exchange_component(v, 2)
-    call exchange_component(w, 3)
-  contains
-    subroutine exchange_component(field, component)
-      real(wp), intent(in) :: field(0:, 0:, 0:)
-      integer, intent(in) :: component
-      integer :: h, count, nzl
-      h = ibm%halo_planes
-      nzl = grid%nz_local
-      count = size(field, 1) * size(field, 2) * h
-      call MPI_Sendrecv(field(:, :, 1:h), count, mpi_wp, grid%slab%rank_below, 410 + component, &
-                        ibm%above(:, :, :, component), count, mpi_wp, grid%slab%rank_above, 410 + component, world, &
-                        MPI_STATUS_IGNORE)
-      call MPI_Sendrecv(field(:, :, nzl - h + 1:nzl), count, mpi_wp, grid%slab%rank_above, 420 + component, &
-                        ibm%below(:, :, :, component), count, mpi_wp, grid%slab%rank_below, 420 + component, world, &
-                        MPI_STATUS_IGNORE)
-    end subroutine exchange_component
-  end subroutine exchange_planes
-
-  !> Which ghost values travel in each direction between sweeps (collective with the neighbours):
-  !> this rank's ghosts in its lowest halo_planes planes go to the rank below (its `above` copies),
-  !> those in its highest planes to the rank above (its `below` copies); each rank sends the other
-  !> where the values go (k as the receiver's plane index: the receiver's nz_local added for `above`).
-  subroutine plan_ghost_traffic(ibm, grid, downward, upward)
-    type(immersed_boundary_t), intent(in) :: ibm
-    type(fluid_grid_t), intent(in) :: grid
-    type(ghost_traffic_t), intent(out) :: downward, upward
-    integer :: c, g, k, h, nzl, n_down, n_up, counts(2)
-    integer, allocatable :: where_down(:, :), where_up(:, :)
+    integer :: h, nzl
     h = ibm%halo_planes
     nzl = grid%nz_local
-    n_down = 0
-    n_up = 0
-    do c = 1, 3
-      associate (nodes => ibm%geometry%component(c))
-        n_down = n_down + count([(nodes%ghost(g)%node(3) <= h, g = 1, nodes%n_ghost)])
-        n_up = n_up + count([(nodes%ghost(g)%node(3) > nzl - h, g = 1, nodes%n_ghost)])
-      end associate
-    end do
-    allocate(downward%outgoing(2, n_down), upward%outgoing(2, n_up), where_down(4, n_down), where_up(4, n_up))
-    n_down = 0
-    n_up = 0
-    do c = 1, 3
-      associate (nodes => ibm%geometry%component(c))
-        do g = 1, nodes%n_ghost
-          k = nodes%ghost(g)%node(3)
-          if (k <= h) then
-            n_down = n_down + 1
-            downward%outgoing(:, n_down) = [c, g]
-            where_down(:, n_down) = [c, nodes%ghost(g)%node(1:2), k]          ! + the receiver's nz_local
-          end if
-          if (k > nzl - h) then
-            n_up = n_up + 1
-            upward%outgoing(:, n_up) = [c, g]
-            where_up(:, n_up) = [c, nodes%ghost(g)%node(1:2), k - nzl]       ! in 1 - h .. 0
-          end if
-        end do
-      end associate
-    end do
-    ! Downward values arrive from the rank above and upward ones from the rank below.
-    call MPI_Sendrecv([n_down], 1, MPI_INTEGER, grid%slab%rank_below, 430, counts(1), 1, MPI_INTEGER, &
-                      grid%slab%rank_above, 430, world, MPI_STATUS_IGNORE)
-    call MPI_Sendrecv([n_up], 1, MPI_INTEGER, grid%slab%rank_above, 431, counts(2), 1, MPI_INTEGER, &
-                      grid%slab%rank_below, 431, world, MPI_STATUS_IGNORE)
-    allocate(downward%incoming(4, counts(1)), upward%incoming(4, counts(2)))
-    call MPI_Sendrecv(where_down, 4 * n_down, MPI_INTEGER, grid%slab%rank_below, 432, downward%incoming, &
-                      4 * counts(1), MPI_INTEGER, grid%slab%rank_above, 432, world, MPI_STATUS_IGNORE)
-    call MPI_Sendrecv(where_up, 4 * n_up, MPI_INTEGER, grid%slab%rank_above, 433, upward%incoming, &
-                      4 * counts(2), MPI_INTEGER, grid%slab%rank_below, 433, world, MPI_STATUS_IGNORE)
-    downward%incoming(4, :) = downward%incoming(4, :) + nzl
-    allocate(downward%send_values(n_down), upward%send_values(n_up), downward%receive_values(counts(1)), &
-             upward%receive_values(counts(2)))
-  end subroutine plan_ghost_traffic
+    ! Shaped like the copies it fills on the other side (kept between calls: no allocation per step).
+    if (allocated(ibm%plane_buffer)) then
+      if (any(shape(ibm%plane_buffer) /= shape(ibm%above))) deallocate(ibm%plane_buffer)
+    end if
+    if (.not. allocated(ibm%plane_buffer)) allocate(ibm%plane_buffer(0:grid%nx + 1, 0:grid%ny + 1, h, 3))
+    associate (buffer => ibm%plane_buffer)
+      buffer(:, :, :, 1) = u(:, :, 1:h)
+      buffer(:, :, :, 2) = v(:, :, 1:h)
+      buffer(:, :, :, 3) = w(:, :, 1:h)
+      call MPI_Sendrecv(buffer, size(buffer), mpi_wp, grid%slab%rank_below, 410, ibm%above, size(ibm%above), mpi_wp, &
+                        grid%slab%rank_above, 410, world, MPI_STATUS_IGNORE)
+      buffer(:, :, :, 1) = u(:, :, nzl - h + 1:nzl)
+      buffer(:, :, :, 2) = v(:, :, nzl - h + 1:nzl)
+      buffer(:, :, :, 3) = w(:, :, nzl - h + 1:nzl)
+      call MPI_Sendrecv(buffer, size(buffer), mpi_wp, grid%slab%rank_above, 420, ibm%below, size(ibm%below), mpi_wp, &
+                        grid%slab%rank_below, 420, world, MPI_STATUS_IGNORE)
+    end associate
+  end subroutine exchange_planes
 
-  !> Refresh the neighbours' plane copies with the current ghost values (collective with the
-  !> neighbours): what exchange_planes would bring after a sweep, which changed only ghost values.
-  subroutine exchange_ghost_values(ibm, grid, downward, upward, u, v, w)
+  !> Which ghost values travel in each direction between sweeps (collective; once per
+  !> classification, ibm%exchange): this rank's ghosts in its lowest halo_planes planes go to the
+  !> rank below (its `above` copies), those in its highest planes to the rank above (its `below`
+  !> copies); each rank sends the other where the values go (k as the receiver's plane index: the
+  !> receiver's nz_local added for `above`), and every rank learns the layout of the sweeps' gather.
+  subroutine plan_ghost_traffic(ibm, grid)
     type(immersed_boundary_t), intent(inout) :: ibm
     type(fluid_grid_t), intent(in) :: grid
-    type(ghost_traffic_t), intent(inout) :: downward, upward
+    integer :: c, g, k, h, nzl, n_down, n_up, counts(2), r
+    integer, allocatable :: where_down(:, :), where_up(:, :), sizes(:, :)
+    associate (downward => ibm%exchange%downward, upward => ibm%exchange%upward)
+      h = ibm%halo_planes
+      nzl = grid%nz_local
+      n_down = 0
+      n_up = 0
+      do c = 1, 3
+        associate (nodes => ibm%geometry%component(c))
+          n_down = n_down + count([(nodes%ghost(g)%node(3) <= h, g = 1, nodes%n_ghost)])
+          n_up = n_up + count([(nodes%ghost(g)%node(3) > nzl - h, g = 1, nodes%n_ghost)])
+        end associate
+      end do
+      if (allocated(downward%outgoing)) deallocate(downward%outgoing, upward%outgoing, downward%incoming, upward%incoming)
+      allocate(downward%outgoing(2, n_down), upward%outgoing(2, n_up), where_down(4, n_down), where_up(4, n_up))
+      n_down = 0
+      n_up = 0
+      do c = 1, 3
+        associate (nodes => ibm%geometry%component(c))
+          do g = 1, nodes%n_ghost
+            k = nodes%ghost(g)%node(3)
+            if (k <= h) then
+              n_down = n_down + 1
+              downward%outgoing(:, n_down) = [c, g]
+              where_down(:, n_down) = [c, nodes%ghost(g)%node(1:2), k]          ! + the receiver's nz_local
+            end if
+            if (k > nzl - h) then
+              n_up = n_up + 1
+              upward%outgoing(:, n_up) = [c, g]
+              where_up(:, n_up) = [c, nodes%ghost(g)%node(1:2), k - nzl]       ! in 1 - h .. 0
+            end if
+          end do
+        end associate
+      end do
+      ! Downward values arrive from the rank above and upward ones from the rank below.
+      call MPI_Sendrecv([n_down], 1, MPI_INTEGER, grid%slab%rank_below, 430, counts(1), 1, MPI_INTEGER, &
+                        grid%slab%rank_above, 430, world, MPI_STATUS_IGNORE)
+      call MPI_Sendrecv([n_up], 1, MPI_INTEGER, grid%slab%rank_above, 431, counts(2), 1, MPI_INTEGER, &
+                        grid%slab%rank_below, 431, world, MPI_STATUS_IGNORE)
+      allocate(downward%incoming(4, counts(1)), upward%incoming(4, counts(2)))
+      call MPI_Sendrecv(where_down, 4 * n_down, MPI_INTEGER, grid%slab%rank_below, 432, downward%incoming, &
+                        4 * counts(1), MPI_INTEGER, grid%slab%rank_above, 432, world, MPI_STATUS_IGNORE)
+      call MPI_Sendrecv(where_up, 4 * n_up, MPI_INTEGER, grid%slab%rank_above, 433, upward%incoming, &
+                        4 * counts(2), MPI_INTEGER, grid%slab%rank_below, 433, world, MPI_STATUS_IGNORE)
+      downward%incoming(4, :) = downward%incoming(4, :) + nzl
+    end associate
+    ! The gather's blocks: [largest change, n_down values, n_up values] of every rank.
+    allocate(sizes(2, 0:n_ranks - 1))
+    call MPI_Allgather([n_down, n_up], 2, MPI_INTEGER, sizes, 2, MPI_INTEGER, world)
+    associate (exchange => ibm%exchange)
+      exchange%counts = [(1 + sizes(1, r) + sizes(2, r), r = 0, n_ranks - 1)]
+      exchange%down_counts = sizes(1, :)
+      exchange%displacements = [(sum(exchange%counts(1:r)), r = 0, n_ranks - 1)]
+      if (allocated(exchange%send)) deallocate(exchange%send, exchange%receive)
+      allocate(exchange%send(1 + n_down + n_up), exchange%receive(sum(exchange%counts)))
+      exchange%planned = .true.
+    end associate
+  end subroutine plan_ghost_traffic
+
+  !> After a coupled sweep (collective): one gather of every rank's block (ghost_exchange_t) puts
+  !> the ghost values the neighbours sent into this rank's plane copies (what exchange_planes would
+  !> bring now: a sweep changes only ghost values) and returns the largest change over the ranks.
+  subroutine gather_sweep_result(ibm, grid, u, v, w, limit, largest)
+    type(immersed_boundary_t), intent(inout) :: ibm
+    type(fluid_grid_t), intent(in) :: grid
     real(wp), intent(in) :: u(0:, 0:, 0:), v(0:, 0:, 0:), w(0:, 0:, 0:)
-    integer :: m
-    call pack_values(downward)
-    call pack_values(upward)
-    call MPI_Sendrecv(downward%send_values, size(downward%send_values), mpi_wp, grid%slab%rank_below, 434, &
-                      downward%receive_values, size(downward%receive_values), mpi_wp, grid%slab%rank_above, 434, &
-                      world, MPI_STATUS_IGNORE)
-    call MPI_Sendrecv(upward%send_values, size(upward%send_values), mpi_wp, grid%slab%rank_above, 435, &
-                      upward%receive_values, size(upward%receive_values), mpi_wp, grid%slab%rank_below, 435, &
-                      world, MPI_STATUS_IGNORE)
-    do m = 1, size(downward%receive_values)
-      associate (at => downward%incoming(:, m))
-        ibm%above(at(2), at(3), at(4), at(1)) = downward%receive_values(m)
-      end associate
-    end do
-    do m = 1, size(upward%receive_values)
-      associate (at => upward%incoming(:, m))
-        ibm%below(at(2), at(3), at(4), at(1)) = upward%receive_values(m)
-      end associate
-    end do
+    real(wp), intent(in) :: limit
+    real(wp), intent(out) :: largest
+    integer :: m, n_down, from_above, from_below
+    associate (exchange => ibm%exchange)
+      n_down = size(exchange%downward%outgoing, 2)
+      exchange%send(1) = limit
+      call pack_values(exchange%downward, exchange%send(2:1 + n_down))
+      call pack_values(exchange%upward, exchange%send(2 + n_down:))
+      call MPI_Allgatherv(exchange%send, size(exchange%send), mpi_wp, exchange%receive, exchange%counts, &
+                          exchange%displacements, mpi_wp, world)
+      ! The largest of the blocks' first entries: the value a MAX reduction gives (max is exact).
+      largest = maxval(exchange%receive(exchange%displacements + 1))
+      ! The rank above's values for the rank below it, then the rank below's for the rank above it.
+      from_above = exchange%displacements(grid%slab%rank_above + 1) + 1
+      do m = 1, size(exchange%downward%incoming, 2)
+        associate (at => exchange%downward%incoming(:, m))
+          ibm%above(at(2), at(3), at(4), at(1)) = exchange%receive(from_above + m)
+        end associate
+      end do
+      from_below = exchange%displacements(grid%slab%rank_below + 1) + 1 + exchange%down_counts(grid%slab%rank_below + 1)
+      do m = 1, size(exchange%upward%incoming, 2)
+        associate (at => exchange%upward%incoming(:, m))
+          ibm%below(at(2), at(3), at(4), at(1)) = exchange%receive(from_below + m)
+        end associate
+      end do
+    end associate
   contains
-    subroutine pack_values(traffic)
-      type(ghost_traffic_t), intent(inout) :: traffic
+    subroutine pack_values(traffic, values)
+      type(ghost_traffic_t), intent(in) :: traffic
+      real(wp), intent(out) :: values(:)
       integer :: n
-      do n = 1, size(traffic%send_values)
+      do n = 1, size(values)
         associate (c => traffic%outgoing(1, n), g => traffic%outgoing(2, n))
           associate (node => ibm%geometry%component(c)%ghost(g)%node)
             select case (c)
             case (1)
-              traffic%send_values(n) = u(node(1), node(2), node(3))
+              values(n) = u(node(1), node(2), node(3))
             case (2)
-              traffic%send_values(n) = v(node(1), node(2), node(3))
+              values(n) = v(node(1), node(2), node(3))
             case default
-              traffic%send_values(n) = w(node(1), node(2), node(3))
+              values(n) = w(node(1), node(2), node(3))
             end select
           end associate
         end associate
       end do
     end subroutine pack_values
-  end subroutine exchange_ghost_values
+  end subroutine gather_sweep_result
 
   pure logical function any_remote_ghost(nodes)
     type(component_nodes_t), intent(in) :: nodes

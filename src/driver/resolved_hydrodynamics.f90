@@ -80,9 +80,8 @@ module resolved_hydrodynamics
   use spheroid, only: spheroid_t
   use icosphere_mesh, only: icosphere_mesh_t, build_icosphere_mesh
   use stokes_resistance, only: spheroid_added_mass_coefficients, stokes_resistance_t, stokes_resistance_of
-  use immersed_geometry, only: immersed_body_t, thin_dimension_cells, fallback_count, saturated_count
-  use parallel_env, only: global_sum
-  use immersed_boundary, only: ibm_settings_t, ibm_set_bodies, ibm_impose, imposition_report_t
+  use immersed_geometry, only: immersed_body_t, thin_dimension_cells
+  use immersed_boundary, only: ibm_settings_t, ibm_set_bodies, ibm_impose, imposition_report_t, ibm_fallback_rows
   use immersed_scene, only: immersed_scene_t, prescribed_motion_t, immersed_scene_create, immersed_step
   use pair_hydrodynamics, only: pair_hydrodynamics_t
   use hypre_solver, only: linear_solver_config_t
@@ -332,8 +331,7 @@ contains
     self%force = self%scene%force
     self%torque = self%scene%torque
     self%dt = dt
-    self%fallbacks = nint(global_sum(real(fallback_count(self%scene%ibm%geometry), wp)))
-    self%saturated = nint(global_sum(real(saturated_count(self%scene%ibm%geometry), wp)))
+    call ibm_fallback_rows(self%scene%ibm, self%fallbacks, self%saturated)
     self%most_fallbacks = max(self%most_fallbacks, self%fallbacks)
     self%most_saturated = max(self%most_saturated, self%saturated)
     self%earlier_acceleration = eoshift(self%earlier_acceleration, shift=-1, boundary=0.0_wp, dim=3)
