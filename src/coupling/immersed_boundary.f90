@@ -52,13 +52,13 @@ module immersed_boundary
   public :: ibm_set_bodies, ibm_impose, ibm_begin_step, ibm_step_loads, cell_divergence_max
   public :: ibm_extend_pressure, status_change_summary, ibm_fallback_rows
 
-  !> A copy of the three components' status fields (the previous classification).
-  type :: status_field_t
-    integer(int8), allocatable :: status(:, :, :)
-  end type status_field_t
-  type :: status_fields_t
-    type(status_field_t) :: field(3)
-  end type status_fields_t
+  !> The solid (ghost and interior) nodes of this rank's planes of one component as the previous
+  !> classification listed them: its lists hold every solid node of the planes, so the status
+  !> changes follow from these few thousand nodes, where a copy of the status fields and their
+  !> comparison took three whole-field passes a step.
+  type :: solid_nodes_t
+    integer, allocatable :: node(:, :)   !< (3, n): i, j global, k local
+  end type solid_nodes_t
 
   !> The ghost values one rank's sweeps send to one neighbour and receive from it (one direction of
   !> the plane exchange; plan_ghost_traffic): after the first whole exchange of the planes, a sweep
@@ -172,10 +172,11 @@ contains
     real(wp), intent(in) :: velocity(:, :), angular_velocity(:, :)
     logical, intent(in) :: classify
     type(immersed_options_t) :: options
-    integer :: n, c, planes, reach(2)
+    integer :: n, c, g, planes, reach(2)
     logical :: remote
     character(len=200) :: text
-    type(status_fields_t) :: previous
+    type(solid_nodes_t) :: previous(3)
+    logical :: classified_before
 
     n = size(bodies)
     if (.not. allocated(ibm%bodies)) then
@@ -204,14 +205,21 @@ contains
     case default
       call fatal('immersed boundary: coupling = '''//trim(ibm%settings%coupling)//'''; allowed: implicit, explicit')
     end select
-    if (allocated(ibm%geometry%component(1)%status)) then
+    classified_before = allocated(ibm%geometry%component(1)%status)
+    if (classified_before) then
       do c = 1, 3
-        previous%field(c)%status = ibm%geometry%component(c)%status
+        associate (nodes => ibm%geometry%component(c))
+          allocate(previous(c)%node(3, nodes%n_ghost + nodes%n_interior))
+          do g = 1, nodes%n_ghost
+            previous(c)%node(:, g) = nodes%ghost(g)%node
+          end do
+          previous(c)%node(:, nodes%n_ghost + 1:) = nodes%interior(:, 1:nodes%n_interior)
+        end associate
       end do
     end if
     call classify_nodes(grid, bodies, options, ibm%geometry)
     ibm%exchange%planned = .false.
-    call count_status_changes(ibm, grid, previous)
+    call count_status_changes(ibm, previous, classified_before)
     ! One reduction for both: the planes the stencils reach (largest) and whether any stencil
     ! holds another rank's ghost node (as 0 / 1, the largest is the logical or).
     reach = 0
@@ -240,19 +248,24 @@ contains
   end subroutine ibm_set_bodies
 
   !> Nodes of this rank's planes whose fluid/solid status differs from the previous classification
-  !> (previous%field(c)%status, unallocated before the first one), summed over the ranks.
-  subroutine count_status_changes(ibm, grid, previous)
+  !> (its solid nodes in previous; none before the first one), summed over the ranks. Uncovered:
+  !> the previous solid nodes that are fluid now; covered: the solid nodes now less those that were
+  !> solid before, i.e. n_now - (n_before - uncovered).
+  subroutine count_status_changes(ibm, previous, classified_before)
     type(immersed_boundary_t), intent(inout) :: ibm
-    type(fluid_grid_t), intent(in) :: grid
-    type(status_fields_t), intent(in) :: previous
-    integer :: c, counts(2)
+    type(solid_nodes_t), intent(in) :: previous(3)
+    logical, intent(in) :: classified_before
+    integer :: c, m, counts(2), uncovered
     counts = 0
-    if (allocated(previous%field(1)%status)) then
+    if (classified_before) then
       do c = 1, 3
-        associate (now => ibm%geometry%component(c)%status(1:grid%nx, 1:grid%ny, 1:grid%nz_local), &
-                   before => previous%field(c)%status(1:grid%nx, 1:grid%ny, 1:grid%nz_local))
-          counts(1) = counts(1) + count(now == node_fluid .and. before /= node_fluid)
-          counts(2) = counts(2) + count(now /= node_fluid .and. before == node_fluid)
+        associate (now => ibm%geometry%component(c), before => previous(c)%node)
+          uncovered = 0
+          do m = 1, size(before, 2)
+            if (now%status(before(1, m), before(2, m), before(3, m)) == node_fluid) uncovered = uncovered + 1
+          end do
+          counts(1) = counts(1) + uncovered
+          counts(2) = counts(2) + now%n_ghost + now%n_interior - (size(before, 2) - uncovered)
         end associate
       end do
     end if
