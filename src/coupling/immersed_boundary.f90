@@ -69,7 +69,7 @@ module immersed_boundary
   end type ghost_traffic_t
 
   !> The traffic of the coupled (lockstep) sweeps, planned once per classification (the ghost lists
-  !> change only then; both impositions of a step use it): after each sweep ONE gather carries every
+  !> change only then; both impositions of a step use it): after each sweep one gather carries every
   !> rank's block [largest change, values for the rank below, values for the rank above], so a sweep
   !> costs one collective where the two neighbour exchanges and the residual's reduction took three
   !> (each a wait for the slowest rank: the cost of a sweep on a shared machine is its waits).
