@@ -94,7 +94,7 @@ module squeeze_case
     integer :: max_sweeps = 1000                 !< ghost-row sweeps (near contact they rise to about 90)
     real(wp) :: offset_cells(3) = [0.31_wp, 0.13_wp, 0.27_wp]   !< gap centre - box centre, cells
     !> &fluid pressure_scheme: 'incremental' (the table of the incremental scheme) or 'non_incremental'
-    !> (the decks' default; docs/validation.md, "Free pair approach")
+    !> (the decks' default; docs/validation.md, "The decks' pressure scheme")
     character(len=16) :: pressure_scheme = 'incremental'
   end type free_squeeze_case_t
 

@@ -77,7 +77,7 @@ program bench_immersed_squeeze
 contains
 
   !> The command line without its leading options (module header) into arguments(:); the options set
-  !> case%pressure_scheme and case%viscous_number (the spheroid ladder copies them).
+  !> case%pressure_scheme, case%viscous_number (the spheroid ladder copies both) and box_cells.
   subroutine read_options()
     integer :: position, total, first, status
     character(len=32) :: value
@@ -97,8 +97,8 @@ contains
         if (status /= 0 .or. any(box_cells < 4)) &
           call fatal('bench_immersed_squeeze: box = '//trim(value)//'; allowed: NX,NY,NZ cells, each >= 4')
       case ('viscous')
-        read(value, *) case%viscous_number
-        if (.not. (case%viscous_number > 0 .and. case%viscous_number < 1.0_wp / 12)) &
+        read(value, *, iostat=status) case%viscous_number
+        if (status /= 0 .or. .not. (case%viscous_number > 0 .and. case%viscous_number < 1.0_wp / 12)) &
           call fatal('bench_immersed_squeeze: viscous = '//trim(value)//'; allowed: 0 < nu dt/dx^2 < 1/12')
       case default
         call fatal('bench_immersed_squeeze: option '//trim(argument)//'; allowed: pressure=, viscous=, box=')
