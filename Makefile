@@ -179,8 +179,14 @@ validate: deps ## run the immersed-boundary validation ladder (the table in docs
 	for c in crossed parallel tip; do $(MPIRUN) -np 1 $(BUILD)/bench/bench_immersed_squeeze spheroids 4 $$c 4 2 1 0.75 0.5; done
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_immersed_squeeze spheroids 6.43 edge 4 2 1 0.75 0.5
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_immersed_squeeze spheroids 6.43 face 4 1.5
+	$(MPIRUN) -np 1 $(BUILD)/bench/bench_immersed_squeeze pressure=non_incremental
+	$(MPIRUN) -np 1 $(BUILD)/bench/bench_immersed_squeeze pressure=non_incremental viscous=0.0786 8 32 8 2 1.5 1 0.75 0.5 0.25 0.1
+	for c in crossed parallel; do $(MPIRUN) -np 1 $(BUILD)/bench/bench_immersed_squeeze pressure=non_incremental viscous=0.0786 \
+	  spheroids 4 $$c 4 1.5 1 0.75 0.5; done
+	$(MPIRUN) -np 1 $(BUILD)/bench/bench_immersed_squeeze pressure=non_incremental viscous=0.0786 spheroids 6.43 face 4 1.5 1 0.75 0.5
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_free_particles
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_free_squeeze
+	$(MPIRUN) -np 1 $(BUILD)/bench/bench_free_squeeze pressure=non_incremental 8 32 0.1 0 0.5 0.75 1
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_free_cn
 	AGGLO=$(abspath $(BUILD))/agglo EXTREMES=long bash tests/mpi/test_resolved_extremes.sh
 

@@ -1,6 +1,7 @@
 !> Reading and checking the whole deck, before anything is allocated; command-line overrides
 !> (`--set group.variable=value`) are merged into the deck text and checked with it.
 module config_reader
+  use agglo_kinds, only: wp
   use agglo_config, only: agglo_config_t, deck_group_names
   use config_checks, only: check_cross_groups, check_every_value, check_scene_combinations
   use deck_file, only: deck_t, deck_load, deck_check_groups, deck_group_close, lower
@@ -13,7 +14,7 @@ module config_reader
   use config_forcing, only: read_forcing_group, check_forcing_group
   use config_pair, only: read_pair_group, check_pair_group
   use config_dlvo, only: read_dlvo_group, check_dlvo_group
-  use config_collision, only: read_collision_group, check_collision_group
+  use config_collision, only: read_collision_group, check_collision_group, default_lubrication_handover
   use config_bodies, only: read_bodies_group, check_bodies_group
   implicit none
   private
@@ -57,6 +58,9 @@ contains
     type(agglo_config_t), intent(out) :: cfg
     call deck_check_groups(deck, deck_group_names)
     call read_groups(deck, cfg)
+    ! &collision lubrication_handover = 0 (its default): the calibrated gap of the scene's pressure scheme.
+    if (cfg%collision%lubrication_handover == 0.0_wp) cfg%collision%lubrication_handover = &
+      default_lubrication_handover(cfg%scene%fluid, cfg%scene%particle_coupling, cfg%fluid%pressure_scheme)
     call check_every_value(cfg)
     call check_run_group(cfg%run)
     call check_scene_group(cfg%scene)

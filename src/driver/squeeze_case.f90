@@ -93,6 +93,9 @@ module squeeze_case
     integer :: max_steps = 40000
     integer :: max_sweeps = 1000                 !< ghost-row sweeps (near contact they rise to about 90)
     real(wp) :: offset_cells(3) = [0.31_wp, 0.13_wp, 0.27_wp]   !< gap centre - box centre, cells
+    !> &fluid pressure_scheme: 'incremental' (the table of the incremental scheme) or 'non_incremental'
+    !> (the decks' default; docs/validation.md, "The decks' pressure scheme")
+    character(len=16) :: pressure_scheme = 'incremental'
   end type free_squeeze_case_t
 
   !> One row per fluid step (allocated to the steps taken).
@@ -268,7 +271,8 @@ contains
     integer :: step, substep, n
 
     t0 = wall_time()
-    call squeeze_fluid([2 * case%width_cells, case%width_cells, case%width_cells], solver, lengths)
+    call squeeze_fluid([2 * case%width_cells, case%width_cells, case%width_cells], solver, lengths, &
+                       case%pressure_scheme)
     width = lengths(2)
 
     h = solver%grid%dx

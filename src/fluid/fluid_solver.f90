@@ -30,8 +30,14 @@
 !> carries the old gradient, u* = ... - (dt / rho) G p^{n-1/2}, and the pressure is updated,
 !>   p^{n+1/2} = p^{n-1/2} + rho (phi - nu dt/2 L phi) (CN) or p^{n-1/2} + rho phi (explicit).
 !> In the periodic box without bodies the projection removes any gradient exactly, so both schemes
-!> give the same u and p (to round-off); the immersed boundary needs the incremental one, whose
-!> u* already holds the pressure gradient when the ghost values are set (docs/design.md).
+!> give the same u and p (to round-off). With immersed bodies they differ: the incremental one sets
+!> the ghost values on a u* that already holds the pressure gradient (no dt-dependent slip; the
+!> prescribed-motion validation uses it), but two flat faces within about a cell of each other grow
+!> without bound with it (docs/theory.md, "Known limit: disks face to face within about a cell").
+!> The resolved pair decks therefore keep the pressure-free default: stable there, with a splitting
+!> error that lowers the squeeze force near contact (it decreases with dt), which the sub-grid
+!> lubrication's larger hand-over for this scheme absorbs (config_collision,
+!> default_lubrication_handover; docs/validation.md, "Lubrication").
 !>
 !> The staged step (docs/design.md, the step's stages) is the same step cut where the immersed
 !> boundary must act; a driver calls, in this order,

@@ -4,6 +4,7 @@
 # $AGGLO on a small fluid-free pair deck and greps the error; the defaults must pass the checks.
 set -u
 . "$(cd "$(dirname "$0")" && pwd)/deck_error_lib.sh"
+resolved_needle="$(cd "$(dirname "$0")/../.." && pwd)/input/quiescent_needle_resolved.nml"
 work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
 cd "$work"
 
@@ -57,6 +58,16 @@ expect_deck_error lubrication_handover_negative 1 "$stokes
 expect_deck_error lubrication_roughness_vs_handover 1 "$stokes
 &collision lubrication = .true., lubrication_roughness = 1.0e-4 /" \
   "&collision lubrication_roughness = 1.00000E-04 is not allowed; allowed: < the hand-over gap"
+# The default hand-over (lubrication_handover = 0) follows the resolved pair's pressure scheme
+# (config_collision, default_lubrication_handover; docs/validation.md, "The decks' pressure scheme"):
+# 0.75 cell with the decks' 'non_incremental', 0.5 cell with 'incremental' (48 cells in 0.64 mm).
+extra_args=(--set collision.lubrication=.true. --set collision.lubrication_roughness=2e-5)
+expect_deck_file_error handover_default_non_incremental 1 "$resolved_needle" \
+  "lubrication_handover * &grid spacing = 1.00000E-05 m"
+extra_args+=(--set "fluid.pressure_scheme='incremental'")
+expect_deck_file_error handover_default_incremental 1 "$resolved_needle" \
+  "lubrication_handover * &grid spacing = 6.66667E-06 m"
+extra_args=()
 
 # The defaults (Table 1) and every option pass the checks (the run may stop later for other reasons,
 # but never with a deck error from these groups).

@@ -2,9 +2,10 @@
 !> (docs/validation.md, "Lubrication", free pair approach; issue 11, validation item 5; module
 !> squeeze_case, run_free_squeeze), the fast subset: D/dx = 8 in a 48 x 24 x 24 box, constant
 !> opposite pushes F = 6 pi mu a U_p (U_p a / nu = 0.3), from rest 2 cells apart to 0.2 cell, without
-!> and with the sub-grid lubrication at the deck's default hand-over (&collision
-!> lubrication_handover). Reference: Brenner's (1961) exact resistance of two spheres approaching
-!> along their line of centres, F_B = 6 pi mu a beta(h) U at the measured speed U.
+!> and with the sub-grid lubrication at the deck's default hand-over for the case's incremental
+!> pressure (&collision lubrication_handover, config_collision's default_lubrication_handover).
+!> Reference: Brenner's (1961) exact resistance of two spheres approaching along their line of
+!> centres, F_B = 6 pi mu a beta(h) U at the measured speed U.
 !>  - 1.5 cells apart the resolved force is within 25% of F_B (the grid carries the squeeze; measured
 !>    +16%, most of it the periodic images of a box 3 D wide, as in test_immersed_squeeze);
 !>  - a quarter cell apart, without lubrication the resolved force misses the squeeze (below 0.8 F_B;
@@ -15,14 +16,13 @@ program test_free_squeeze
   use agglo_kinds, only: wp
   use physical_constants, only: pi
   use parallel_env, only: parallel_start
-  use config_collision, only: collision_config_t
+  use config_collision, only: default_lubrication_handover
   use squeeze_case, only: free_squeeze_case_t, free_squeeze_history_t, run_free_squeeze, free_squeeze_sample, &
                           brenner_squeeze_coefficient, squeeze_dynamic_viscosity
   use test_framework, only: test_start, test_finish, check, check_close, check_below
   implicit none
   type(free_squeeze_case_t) :: case
   type(free_squeeze_history_t) :: free, lubricated
-  type(collision_config_t) :: deck_default
 
   call parallel_start()
   call test_start('free_squeeze')
@@ -38,7 +38,7 @@ program test_free_squeeze
                    'resolved_force_at_quarter_cell_misses_the_squeeze')
 
   case%lubrication = .true.
-  case%handover_cells = deck_default%lubrication_handover
+  case%handover_cells = default_lubrication_handover('resolved', 'resolved', case%pressure_scheme)
   call run_free_squeeze(case, lubricated)
   call check(lubricated%reached, 'lubricated_pair_closes_to_a_fifth_of_a_cell')
   call check_close(force_at(lubricated, lubricated%resolved + lubricated%lubrication, 0.25_wp), &

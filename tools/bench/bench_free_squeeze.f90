@@ -8,11 +8,13 @@
 !> against the reference's, and the forces along the line of centres over Brenner's at the measured
 !> speed, F_B = 6 pi mu a beta(h) U: the resolved one, the lubrication one and their sum.
 !> Arguments (all optional): D/dx, box width n_y (cells), U_p a / nu, then the hand-over gaps in
-!> cells, 0 meaning lubrication off (default 8 32 0.1 0 1 0.5).
+!> cells, 0 meaning lubrication off (default 8 32 0.1 0 1 0.5). A leading option
+!> pressure=incremental|non_incremental sets &fluid pressure_scheme (default 'incremental').
 program bench_free_squeeze
   use agglo_kinds, only: wp
   use physical_constants, only: pi
   use parallel_env, only: parallel_start, parallel_stop, is_root
+  use error_handling, only: fatal
   use squeeze_case, only: free_squeeze_case_t, free_squeeze_history_t, run_free_squeeze, approach_reference, &
                           free_squeeze_sample, &
                           brenner_squeeze_coefficient, squeeze_dynamic_viscosity
@@ -25,12 +27,24 @@ program bench_free_squeeze
   real(wp) :: speed, time, resolved, lubricated, brenner, time_start, reference_start
   character(len=32) :: argument, setting
   integer :: count, r, g
+  integer :: shift   ! leading options before the positional arguments
 
   call parallel_start()
   count = command_argument_count()
+  shift = 0
+  if (count >= 1) then
+    call get_command_argument(1, argument)
+    if (index(argument, 'pressure=') == 1) then
+      case%pressure_scheme = argument(len('pressure=') + 1:)
+      if (case%pressure_scheme /= 'incremental' .and. case%pressure_scheme /= 'non_incremental') &
+        call fatal('bench_free_squeeze: pressure = '//trim(case%pressure_scheme)//'; allowed: incremental, non_incremental')
+      shift = 1
+      count = count - 1
+    end if
+  end if
   if (count >= 1) call read_argument(1, case%diameter_cells)
   if (count >= 2) then
-    call get_command_argument(2, argument)
+    call get_command_argument(2 + shift, argument)
     read(argument, *) case%width_cells
   end if
   if (count >= 3) call read_argument(3, case%push_reynolds)
@@ -55,9 +69,10 @@ program bench_free_squeeze
     if (.not. is_root()) cycle
     setting = 'off'
     if (case%lubrication) setting = 'on, h_out = '//trim(number(handovers(r)))//' cells'
-    print '(a,f4.1,a,i0,a,i0,a,f5.3,a,a,a,i0,a,i0,a,f7.1,a)', '**D/dx = ', case%diameter_cells, ', box ', &
+    print '(a,f4.1,a,i0,a,i0,a,f5.3,a,a,a,a,a,i0,a,i0,a,f7.1,a)', '**D/dx = ', case%diameter_cells, ', box ', &
         2 * case%width_cells, 'x', case%width_cells, '², U_p a/nu = ', case%push_reynolds, ', lubrication ', &
-        trim(setting), '** (', history%steps, ' fluid steps, at most ', history%max_sweeps_seen, &
+        trim(setting), ', pressure ', trim(case%pressure_scheme), '** (', history%steps, ' fluid steps, at most ', &
+        history%max_sweeps_seen, &
         ' sweeps, ', history%wall_seconds, ' s)'
     print '(a)', ''
     print '(a)', '| h/dx | h/a | U (m/s) | U / U_ref - 1 | closing time from 4 cells / ref - 1 | ' // &
@@ -89,7 +104,7 @@ contains
   subroutine read_argument(position, value)
     integer, intent(in) :: position
     real(wp), intent(out) :: value
-    call get_command_argument(position, argument)
+    call get_command_argument(position + shift, argument)
     read(argument, *) value
   end subroutine read_argument
 
