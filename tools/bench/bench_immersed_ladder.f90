@@ -46,6 +46,10 @@ program bench_immersed_ladder
     call run_section('spheroid-offsets')
     call run_section('spheroid-offsets:15:needle::4:crank_nicolson:5')
     call run_section('spheroid-offsets:8.8:disk::4:crank_nicolson:5')
+    ! One step finer (1.27 times the paper's thin dimension), then the disk at 14 cells thin.
+    call run_section('spheroid-offsets:19:needle::8:crank_nicolson:5:2:ladder')
+    call run_section('spheroid-offsets:11.2:disk::4:crank_nicolson:5:2:ladder')
+    call run_section('spheroid-offsets:14:disk::8:crank_nicolson:5:2:ladder')
     call run_section('spheroid-transfer')
   else
     do a = 1, command_argument_count()
