@@ -46,10 +46,13 @@ program bench_immersed_ladder
     call run_section('spheroid-offsets')
     call run_section('spheroid-offsets:15:needle::4:crank_nicolson:5')
     call run_section('spheroid-offsets:8.8:disk::4:crank_nicolson:5')
-    ! One step finer (1.27 times the paper's thin dimension), then the disk at 14 cells thin.
-    call run_section('spheroid-offsets:19:needle::8:crank_nicolson:5:2:ladder')
-    call run_section('spheroid-offsets:11.2:disk::4:crank_nicolson:5:2:ladder')
-    call run_section('spheroid-offsets:14:disk::8:crank_nicolson:5:2:ladder')
+    ! 1.27 and 1.6 times the paper's thin dimension (docs/validation.md, rung 6): 8 offsets and the
+    ! ladder's, 16 for the needle across its axis at 19 cells and for both shapes at 1.6 times.
+    call run_section('spheroid-offsets:19:needle:along:8:crank_nicolson:5:2:ladder')
+    call run_section('spheroid-offsets:19:needle:across:16:crank_nicolson:5:2:ladder')
+    call run_section('spheroid-offsets:11.2:disk::8:crank_nicolson:5:2:ladder')
+    call run_section('spheroid-offsets:14:disk::16:crank_nicolson:5:2:ladder')
+    call run_section('spheroid-offsets:24:needle::16:crank_nicolson:5:2:ladder')
     call run_section('spheroid-transfer')
   else
     do a = 1, command_argument_count()
