@@ -18,7 +18,8 @@
 !>   fitted on four boxes at 4.4 cells thin and carried to one box at the finer grid;
 !>   spheroid-symmetry[:thin cells[:shape]]: torque of a translating needle and disk at the paper's
 !>   thin-dimension resolution in tight boxes; spheroid-offsets[:thin cells[:shape[:motion[:count...]]]]:
-!>   that torque over sub-cell offsets, momentum balance and face sum side by side;
+!>   that torque over sub-cell offsets (with :ladder last, the ladder's offset as one more), momentum
+!>   balance and face sum side by side;
 !>   spheroid:shape:motion:thin:box:scheme:nu dt/dx^2: one run.
 program bench_immersed_ladder
   use agglo_kinds, only: wp
@@ -45,6 +46,13 @@ program bench_immersed_ladder
     call run_section('spheroid-offsets')
     call run_section('spheroid-offsets:15:needle::4:crank_nicolson:5')
     call run_section('spheroid-offsets:8.8:disk::4:crank_nicolson:5')
+    ! 1.27 and 1.6 times the paper's thin dimension (docs/validation.md, rung 6): 8 offsets and the
+    ! ladder's, 16 for the needle across its axis at 19 cells and for both shapes at 1.6 times.
+    call run_section('spheroid-offsets:19:needle:along:8:crank_nicolson:5:2:ladder')
+    call run_section('spheroid-offsets:19:needle:across:16:crank_nicolson:5:2:ladder')
+    call run_section('spheroid-offsets:11.2:disk::8:crank_nicolson:5:2:ladder')
+    call run_section('spheroid-offsets:14:disk::16:crank_nicolson:5:2:ladder')
+    call run_section('spheroid-offsets:24:needle::16:crank_nicolson:5:2:ladder')
     call run_section('spheroid-transfer')
   else
     do a = 1, command_argument_count()
@@ -110,7 +118,7 @@ contains
           '''; allowed: arrays, dilute, rotating, sweeps, spheroids (each optionally :D/dx:coupling; ' // &
           'for spheroids :thin cells:coupling), spheroid:shape:motion:thin cells:box cells:scheme:nu dt/dx^2, ' // &
           'spheroid-transfer[:thin cells[:shape[:motion]]], spheroid-symmetry[:thin cells[:shape]], ' // &
-          'spheroid-offsets[:thin cells[:shape[:motion[:count[:scheme[:nu dt/dx^2[:level]]]]]]]'
+          'spheroid-offsets[:thin cells[:shape[:motion[:count[:scheme[:nu dt/dx^2[:level[:ladder]]]]]]]]'
       error stop 1
     end select
   end subroutine run_section
@@ -607,24 +615,27 @@ contains
   end function tight_box_case
 
   !> The torque of a translating needle and disk over sub-cell offsets (docs/validation.md, rung 6),
-  !> spheroid-offsets[:thin cells[:shape[:motion[:count[:scheme[:nu dt/dx^2[:level]]]]]]], defaults
-  !> 4.4 cells, both shapes, along and across, 8 offsets, explicit, 0.06, icosphere level 2. The
+  !> spheroid-offsets[:thin cells[:shape[:motion[:count[:scheme[:nu dt/dx^2[:level[:ladder]]]]]]]],
+  !> defaults 4.4 cells, both shapes, along and across, 8 offsets, explicit, 0.06, icosphere level 2. The
   !> offsets are the first `count` points of the R3 low-discrepancy sequence (Roberts 2018: the
   !> fractional parts of 1/2 + k (1/g, 1/g^2, 1/g^3), g^4 = g + 1) minus 1/2, spread evenly over the
-  !> cell; the tight box of spheroid-symmetry. Per offset the momentum-balance and the face-sum
-  !> torque over F r and the relative change of T/U over the last sampling window (the steadiness
-  !> of the torque); per case their median, root mean square and largest value.
+  !> cell, and with `ladder` the ladder's offset (0.13, 0.27, 0.41) as one more (the offset of the
+  !> spheroids and spheroid-symmetry tables); the tight box of spheroid-symmetry. Per offset the
+  !> momentum-balance and the face-sum torque over F r and the relative change of T/U over the last
+  !> sampling window (the steadiness of the torque); per case their median, root mean square and
+  !> largest value.
   subroutine spheroid_offsets(spec)
     character(len=*), intent(in) :: spec
     character(len=*), parameter :: motion_names(2) = [character(len=6) :: 'along', 'across']
     character(len=8), parameter :: shapes(2) = [character(len=8) :: 'needle', 'disk']
     real(wp), parameter :: plastic = 1.22074408460575947536_wp
-    character(len=32) :: fields(8), scheme
+    character(len=32) :: fields(9), scheme
     type(sphere_array_case_t) :: case
     type(sphere_array_result_t) :: result
     real(wp) :: thin, number, coefficient, alpha(3), drift
     real(wp), allocatable :: momentum(:), surface(:)
-    integer :: n, s, m, k, count, level, last, status(4)
+    integer :: n, s, m, k, count, samples, level, last, status(4)
+    logical :: with_ladder
     call split_fields(spec, fields, n)
     thin = 4.4_wp; count = 8; scheme = 'explicit'; number = 0.06_wp; level = 2
     status = 0
@@ -633,15 +644,18 @@ contains
     if (n >= 6 .and. len_trim(fields(6)) > 0) scheme = fields(6)
     if (n >= 7 .and. len_trim(fields(7)) > 0) read(fields(7), *, iostat=status(3)) number
     if (n >= 8 .and. len_trim(fields(8)) > 0) read(fields(8), *, iostat=status(4)) level
+    with_ladder = n >= 9 .and. trim(fields(9)) == 'ladder'
     if (any(status /= 0) .or. thin <= 0 .or. count < 1 .or. number <= 0 .or. level < 0 .or. &
-        (trim(scheme) /= 'explicit' .and. trim(scheme) /= 'crank_nicolson')) then
+        (trim(scheme) /= 'explicit' .and. trim(scheme) /= 'crank_nicolson') .or. &
+        (n >= 9 .and. .not. with_ladder .and. len_trim(fields(9)) > 0)) then
       if (is_root()) print '(a)', 'bench_immersed_ladder: '''//trim(spec)//''': expected spheroid-offsets' // &
           '[:thin cells > 0[:needle|disk[:along|across[:count >= 1[:explicit|crank_nicolson[:nu dt/dx^2 > 0' // &
-          '[:icosphere level >= 0]]]]]]]'
+          '[:icosphere level >= 0[:ladder]]]]]]]]'
       error stop 1
     end if
     alpha = [1.0_wp / plastic, 1.0_wp / plastic**2, 1.0_wp / plastic**3]
-    allocate(momentum(count), surface(count))
+    samples = count + merge(1, 0, with_ladder)
+    allocate(momentum(samples), surface(samples))
     if (is_root()) then
       print '(a)', '| shape | motion | thin cells | box cells | offset (cells) | torque/(F r) momentum | ' // &
           'torque/(F r) face sum | T/U change, last window | steps | wall s |'
@@ -651,9 +665,10 @@ contains
       if (n >= 3 .and. len_trim(fields(3)) > 0 .and. trim(fields(3)) /= trim(shapes(s))) cycle
       do m = 1, size(motion_names)
         if (n >= 4 .and. len_trim(fields(4)) > 0 .and. trim(fields(4)) /= trim(motion_names(m))) cycle
-        do k = 1, count
+        do k = 1, samples
           case = tight_box_case(shapes(s), m, thin, scheme, number)
-          case%offset_cells = modulo(0.5_wp + k * alpha, 1.0_wp) - 0.5_wp
+          ! Past `count`: the case's own offset, the ladder's (0.13, 0.27, 0.41).
+          if (k <= count) case%offset_cells = modulo(0.5_wp + k * alpha, 1.0_wp) - 0.5_wp
           case%surface_level = level
           case%history_every = case%aitken_window
           call run_sphere_array(case, result)
@@ -670,9 +685,9 @@ contains
               merge(' |         ', ' unsteady |', result%steady)
         end do
         if (is_root()) print '(a,a,a,a,a,i0,a,3es9.2,a,3es9.2,a)', '|   | ', trim(shapes(s)), ', ', &
-            trim(motion_names(m)), ': over ', count, ' offsets, median, rms, largest: momentum ', &
-            median(momentum), sqrt(sum(momentum**2) / count), maxval(momentum), '; face sum ', median(surface), &
-            sqrt(sum(surface**2) / count), maxval(surface), ' |'
+            trim(motion_names(m)), ': over ', samples, ' offsets, median, rms, largest: momentum ', &
+            median(momentum), sqrt(sum(momentum**2) / samples), maxval(momentum), '; face sum ', median(surface), &
+            sqrt(sum(surface**2) / samples), maxval(surface), ' |'
       end do
     end do
     if (is_root()) print '(a)', ''
