@@ -10,25 +10,26 @@ Usage: tools/speed-accuracy-study.sh [options]
 
 Each knob of the resolved pair scene varied alone on the chaotic protocol
 (input/chaotic_<shape>_resolved.nml, the 'base' setting: 128^3, analytic geometry, momentum
-loads, implicit coupling, explicit diffusion at 0.8 of its limit, particle step 2e-7 s), on the
+loads, implicit coupling, explicit diffusion at 0.94 of its limit, particle step 2e-7 s), on the
 same N seeds per shape (S..S+N-1), against the knob's reference setting. Run from the repository
 root after `make build tools-deps`.
 
   knob         variant      overrides (--set) on the base deck                            reference
-  grid         grid96       grid 96^3, dt 7.2e-6 s, 36 sub-steps, field hit_box_96       grid192
-               base         128^3, dt 4e-6 s, 20 sub-steps
-               grid192      grid 192^3, dt 1.8e-6 s, 9 sub-steps, field hit_box_192
-               grid256      grid 256^3, dt 1e-6 s, 5 sub-steps, field hit_box_256 (first N256 seeds)
+  grid         grid96       grid 96^3, dt 8.4e-6 s, 42 sub-steps, field hit_box_96       grid192
+               base         128^3, dt 4.8e-6 s, 24 sub-steps (the deck's)
+               grid192      grid 192^3, dt 2e-6 s, 10 sub-steps, field hit_box_192
+               grid256      grid 256^3, dt 1.2e-6 s, 6 sub-steps, field hit_box_256 (first N256 seeds)
   geometry     mesh80/320/1280  &bodies geometry = 'mesh', mesh_level = 1/2/3              base
   load_method  surface      &bodies load_method = 'surface' (mesh_level 2)                  base
   coupling     explicit     &scene ibm_coupling = 'explicit'                                 base
-  diffusion    cn2/cn5/cn10 &fluid viscous_scheme = 'crank_nicolson', dt 2/5/10 x 4e-6 s,    base
-                            sub-steps 40/100/200 (particle step stays 2e-7 s)
-  substep      substep5e-7/1e-6/2e-6  particle_substeps 8/4/2 (particle step 5e-7..2e-6 s)   base
+  diffusion    cn2/cn5/cn10 &fluid viscous_scheme = 'crank_nicolson', dt 2/5/10 x 4.8e-6 s,  base
+                            sub-steps 48/120/240 (particle step stays 2e-7 s)
+  substep      substep6e-7/1.2e-6/2.4e-6  particle_substeps 8/4/2 (particle step 6e-7..2.4e-6 s)  base
   fidelity     point        input/chaotic_<shape>_point.nml                                  base
                stokes, none input/quiescent_<shape>_{stokes,none}.nml with the chaotic
                             protocol's gap 2 um, 4.2 mm/s, random approach, 3 ms, paper end
-  The dt of each grid is 0.8 of the explicit diffusion limit dx^2 / (12 nu) (docs/decks.md, &run dt).
+  The dt of each grid is 0.88-0.94 of the explicit diffusion limit dx^2 / (12 nu) (docs/decks.md,
+  &run dt), a whole number of particle steps of 2e-7 s; 128^3 is the decks' 4.8e-6 s.
   Batches: OUT/<shape>-<variant>; the 'base' batch serves every knob that has it as reference.
 
   0. the converged forced field of each grid (output/hit_box_<n>/final_field.h5; input/hit_box.nml
@@ -100,11 +101,11 @@ chaotic_protocol=(--set pair.gap=2.0e-6 --set pair.relative_speed=4.2e-3 --set "
 for knob in "${knob_list[@]}"; do
   case $knob in
     grid)
-      mapfile -t sets < <(grid_sets 96 7.2e-6 36); variant grid grid96 grid192 "$resolved" "$runs" "${quiet[@]}" "${sets[@]}"
+      mapfile -t sets < <(grid_sets 96 8.4e-6 42); variant grid grid96 grid192 "$resolved" "$runs" "${quiet[@]}" "${sets[@]}"
       variant grid base grid192 "$resolved" "$runs" "${quiet[@]}"
-      mapfile -t sets < <(grid_sets 192 1.8e-6 9); variant grid grid192 grid192 "$resolved" "$runs" "${quiet[@]}" "${sets[@]}"
+      mapfile -t sets < <(grid_sets 192 2.0e-6 10); variant grid grid192 grid192 "$resolved" "$runs" "${quiet[@]}" "${sets[@]}"
       if (( runs_256 > 0 )); then
-        mapfile -t sets < <(grid_sets 256 1.0e-6 5); variant grid grid256 grid192 "$resolved" "$runs_256" "${quiet[@]}" "${sets[@]}"
+        mapfile -t sets < <(grid_sets 256 1.2e-6 6); variant grid grid256 grid192 "$resolved" "$runs_256" "${quiet[@]}" "${sets[@]}"
       fi ;;
     geometry)
       variant geometry base base "$resolved" "$runs" "${quiet[@]}"
@@ -123,12 +124,12 @@ for knob in "${knob_list[@]}"; do
       variant diffusion base base "$resolved" "$runs" "${quiet[@]}"
       for factor in 2 5 10; do
         variant diffusion "cn$factor" base "$resolved" "$runs" "${quiet[@]}" \
-          --set "fluid.viscous_scheme='crank_nicolson'" --set "run.dt=$(awk -v f="$factor" 'BEGIN { printf "%.1e", 4.0e-6 * f }')" \
-          --set "scene.particle_substeps=$((20 * factor))"
+          --set "fluid.viscous_scheme='crank_nicolson'" --set "run.dt=$(awk -v f="$factor" 'BEGIN { printf "%.1e", 4.8e-6 * f }')" \
+          --set "scene.particle_substeps=$((24 * factor))"
       done ;;
     substep)
       variant substep base base "$resolved" "$runs" "${quiet[@]}"
-      for pair in 5e-7:8 1e-6:4 2e-6:2; do
+      for pair in 6e-7:8 1.2e-6:4 2.4e-6:2; do
         variant substep "substep${pair%%:*}" base "$resolved" "$runs" "${quiet[@]}" --set "scene.particle_substeps=${pair##*:}"
       done ;;
     fidelity)

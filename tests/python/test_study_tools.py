@@ -254,9 +254,9 @@ def test_study_scripts_list_their_batches():
     result = run_tool([REPO / "tools" / "speed-accuracy-study.sh", "--list", "--shapes", "disk",
                        "--knobs", "diffusion substep"], cwd=REPO)
     assert result.returncode == 0, result.stderr
-    assert "disk-cn5" in result.stdout and "run.dt=2.0e-05" in result.stdout
-    assert "scene.particle_substeps=100" in result.stdout
-    assert "disk-substep2e-6" in result.stdout and "scene.particle_substeps=2" in result.stdout
+    assert "disk-cn5" in result.stdout and "run.dt=2.4e-05" in result.stdout
+    assert "scene.particle_substeps=120" in result.stdout
+    assert "disk-substep2.4e-6" in result.stdout and "scene.particle_substeps=2" in result.stdout
 
 
 def test_study_slurm_scripts_and_forced_field_dependency(spaced_tmp):
