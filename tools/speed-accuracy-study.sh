@@ -48,8 +48,9 @@ Options of this study:
       --shapes "A B"     shapes (default "needle disk sphere")
       --knobs "K ..."    knobs (default "grid geometry load_method coupling diffusion substep fidelity")
 
-Crank-Nicolson with free particles is refused by the code until it is lifted (docs/decks.md,
-&scene particle_coupling): the diffusion batches then fail at once, and say so.
+The base batches and the point batches are the chaotic study's on its first N seeds
+(tools/chaotic-study.sh: the same decks, --set values and seeds): by default their complete runs
+are reused from output/chaotic-study (--reuse-from; --no-reuse computes them again).
 EOF
 }
 
@@ -67,6 +68,7 @@ while [ $# -gt 0 ]; do
     *) study_die "unknown argument '$1' (see --help)" ;;
   esac
 done
+(( study_reuse_given )) || study_reuse_dirs=(output/chaotic-study)
 [[ $runs =~ ^[1-9][0-9]*$ ]] || study_die "--runs '$runs' is not an integer >= 1"
 [[ $runs_256 =~ ^[0-9]+$ ]] || study_die "--runs-256 '$runs_256' is not an integer >= 0"
 read -r -a shape_list <<< "$shapes"

@@ -36,6 +36,10 @@ Common options:
       --keep-fields        keep each complete run's field snapshots and final field (default:
                            deleted after the batch; the analysis reads summary.json and
                            particles.h5 only; 3 x 67 MB per resolved run at 128^3)
+      --reuse-from DIR     before running a batch, hard-link in the complete runs of an identical
+                           batch under DIR (a DIR/<batch>/ with the same base deck text and seed,
+                           tools/montecarlo.sh's batch.nml and batch.conf) instead of computing
+                           them again; repeatable; --no-reuse drops the study's default
       --no-analysis        skip the statistics and figures at the end
       --publish            after the analysis, copy its figures (PNG) and small tables (rates,
                            means, illustrative runs, comparisons, costs; not runs.csv) into
@@ -55,8 +59,8 @@ EOF
 study_parse_arguments() {
   study_out="output/$study_name" study_seed=1001 study_jobs=1 study_jobs_given=0 study_ranks=2
   study_launcher='' study_time='' study_only='' study_mode=run study_keep_checkpoints=0 study_keep_fields=0
-  study_analysis=1 study_publish=0
-  study_sbatch_options=()
+  study_analysis=1 study_publish=0 study_reuse_given=0
+  study_sbatch_options=() study_reuse_dirs=()
   study_extra_arguments=()
   while [ $# -gt 0 ]; do
     case "$1" in
@@ -73,6 +77,8 @@ study_parse_arguments() {
       --sbatch-option) study_sbatch_options+=("${2:?--sbatch-option needs a value}"); shift 2 ;;
       --keep-checkpoints) study_keep_checkpoints=1; shift ;;
       --keep-fields) study_keep_fields=1; shift ;;
+      --reuse-from) study_reuse_dirs+=("${2:?--reuse-from needs a value}"); study_reuse_given=1; shift 2 ;;
+      --no-reuse) study_reuse_dirs=(); study_reuse_given=1; shift ;;
       --no-analysis) study_analysis=0; shift ;;
       --publish) study_publish=1; shift ;;
       -h|--help) study_usage_specific; echo; study_usage_common; exit 0 ;;
@@ -217,6 +223,7 @@ study_batch() {
   if [ -n "$field" ]; then
     study_forced_field "$field" "$nx" || { study_status_all=1; return 0; }
   fi
+  study_reuse_runs "$root" "$runs" "$deck" "$@"
   [ -d "$root" ] && before=$(find "$root" -mindepth 2 -maxdepth 2 -name summary.json | wc -l)
   echo "== batch $root ($runs runs of $deck $*)"
   [ -n "$study_time" ] && common+=(--time "$study_time")
@@ -227,6 +234,46 @@ study_batch() {
   study_time_row "$root" "$runs" "$study_jobs" $((runs - before)) "$(echo "$end - $start" | bc)" "$status"
   [ "$status" -eq 0 ] || { echo "$study_name: batch $root exit status $status" >&2; study_status_all=1; }
   study_prune "$root"
+}
+
+# study_reuse_runs ROOT RUNS DECK [--set ...]: the complete runs 1..RUNS of an identical batch under
+# a --reuse-from directory, hard-linked (copied across file systems) into ROOT, so that
+# tools/montecarlo.sh skips them. Identical means the same base deck text (batch.nml, the code's own
+# --print-deck of DECK with the --set values, as tools/montecarlo.sh writes it) and the same base
+# seed: run i then has the same seed and deck as in the other batch, and the same executable would
+# repeat it to the bit. A ROOT that already holds a batch keeps its batch.nml and batch.conf.
+study_reuse_runs() {
+  local root=$1 runs=$2 deck=$3 source_root conf text i run linked=0; shift 3
+  (( ${#study_reuse_dirs[@]} )) || return 0
+  text=$("${AGGLO:-$study_repo/build/agglo}" "$deck" "$@" --print-deck 2> /dev/null < /dev/null) || return 0
+  text+=$'\n'
+  local -a confs=()
+  for source_root in "${study_reuse_dirs[@]}"; do
+    for conf in "$source_root"/*/batch.conf; do [ -f "$conf" ] && confs+=("$conf"); done
+  done
+  for conf in "${confs[@]}"; do
+    source_root=$(dirname "$conf")
+    [ "$(cd "$source_root" && pwd -P)" = "$(cd "$root" 2> /dev/null && pwd -P)" ] && continue
+    [ "$(sed -n 's/^base_seed=//p' "$conf")" = "$study_seed" ] || continue
+    printf '%s' "$text" | cmp -s - "$source_root/batch.nml" || continue
+    if [ -f "$root/batch.conf" ]; then
+      cmp -s "$root/batch.nml" "$source_root/batch.nml" || continue
+    else
+      mkdir -p "$root" && cp "$source_root/batch.nml" "$source_root/batch.conf" "$root/" || return 0
+    fi
+    for ((i = 1; i <= runs; i++)); do
+      run=$(printf 'run_%04d' "$i")
+      [ -f "$source_root/$run/summary.json" ] && [ ! -e "$source_root/$run/FAILED" ] || continue
+      [ -e "$root/$run" ] && continue
+      rm -rf "$root/.$run.partial"
+      cp -al "$source_root/$run" "$root/.$run.partial" 2> /dev/null || \
+        { rm -rf "$root/.$run.partial"; cp -a "$source_root/$run" "$root/.$run.partial"; } || continue
+      mv "$root/.$run.partial" "$root/$run" || continue
+      linked=$((linked + 1))
+    done
+    (( linked )) && echo "== batch $root: $linked complete runs reused from $source_root (same deck and seeds)"
+    return 0
+  done
 }
 
 # study_prune ROOT: the bulky files of the complete runs of a batch. Checkpoints are only needed to

@@ -313,3 +313,25 @@ def test_study_runs_resumes_and_records_costs(spaced_tmp, agglo, monkeypatch):
     assert "needle-none\t2\t" in costs_published and str(out) not in costs_published
     assert (published / "stats-all_rates.csv").exists()
     assert not list(published.glob("*runs.csv"))
+
+
+def test_study_reuses_the_runs_of_an_identical_batch(spaced_tmp, agglo):
+    """--reuse-from: the complete runs of a batch with the same base deck and seed are hard-linked
+    in and not run again; a batch of another deck takes nothing from it."""
+    first, second = spaced_tmp / "first", spaced_tmp / "second"
+    command = [REPO / "tools" / "speed-accuracy-study.sh", "--knobs", "fidelity", "--shapes", "disk",
+               "--no-analysis"]
+    result = run_tool(command + ["-o", first, "-N", "2", "--no-reuse", "--only", "^disk-none$"], cwd=REPO)
+    assert result.returncode == 0, result.stderr + result.stdout
+    result = run_tool(command + ["-o", second, "-N", "3", "--reuse-from", first, "--only", "^disk-(none|stokes)$"],
+                      cwd=REPO)
+    assert result.returncode == 0, result.stderr + result.stdout
+    reused = [line for line in result.stdout.splitlines() if "reused" in line]
+    assert reused == [f"== batch {second}/disk-none: 2 complete runs reused from {first}/disk-none (same deck and seeds)"]
+    times = read_csv(second / "batch_times.tsv", "\t")
+    assert [(os.path.basename(row["batch"]), row["runs_run_by_this_call"]) for row in times] == [
+        ("disk-stokes", "3"), ("disk-none", "1")]
+    for run in ("run_0001", "run_0002"):
+        assert os.path.samefile(first / "disk-none" / run / "summary.json", second / "disk-none" / run / "summary.json")
+    assert (second / "disk-none" / "run_0003" / "summary.json").exists()
+    assert not (first / "disk-none" / "run_0003").exists()
