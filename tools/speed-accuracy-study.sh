@@ -25,6 +25,8 @@ root after `make build tools-deps`.
   diffusion    cn2/cn5/cn10 &fluid viscous_scheme = 'crank_nicolson', dt 2/5/10 x 4.8e-6 s,  base
                             sub-steps 48/120/240 (particle step stays 2e-7 s)
   substep      substep6e-7/1.2e-6/2.4e-6  particle_substeps 8/4/2 (particle step 6e-7..2.4e-6 s)  base
+  noise        perturbed    &pair gap 2.000000000002e-6 m (1e-12 relative): the round-off     base
+                            floor of every metric (the flow is chaotic)
   fidelity     point        input/chaotic_<shape>_point.nml                                  base
                stokes, none input/quiescent_<shape>_{stokes,none}.nml with the chaotic
                             protocol's gap 2 um, 4.2 mm/s, random approach, 3 ms, paper end
@@ -46,7 +48,8 @@ Options of this study:
   -N, --runs N           seeds per shape (default 20)
       --runs-256 M       seeds of the 256^3 subset (default 5; 0 skips it)
       --shapes "A B"     shapes (default "needle disk sphere")
-      --knobs "K ..."    knobs (default "grid geometry load_method coupling diffusion substep fidelity")
+      --knobs "K ..."    knobs (default "noise grid geometry load_method coupling diffusion substep
+                         fidelity")
 
 The base batches and the point batches are the chaotic study's on its first N seeds
 (tools/chaotic-study.sh: the same decks, --set values and seeds): by default their complete runs
@@ -57,7 +60,7 @@ EOF
 source "$(dirname "${BASH_SOURCE[0]}")/study_lib.sh"
 study_parse_arguments "$@"
 runs=20 runs_256=5 shapes="needle disk sphere"
-knobs="grid geometry load_method coupling diffusion substep fidelity"
+knobs="noise grid geometry load_method coupling diffusion substep fidelity"
 set -- "${study_extra_arguments[@]}"
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -74,7 +77,7 @@ done
 read -r -a shape_list <<< "$shapes"
 read -r -a knob_list <<< "$knobs"
 for knob in "${knob_list[@]}"; do
-  [[ $knob =~ ^(grid|geometry|load_method|coupling|diffusion|substep|fidelity)$ ]] || \
+  [[ $knob =~ ^(noise|grid|geometry|load_method|coupling|diffusion|substep|fidelity)$ ]] || \
     study_die "--knobs: unknown knob '$knob'"
 done
 
@@ -102,6 +105,10 @@ chaotic_protocol=(--set pair.gap=2.0e-6 --set pair.relative_speed=4.2e-3 --set "
                   --set pair.mirror_first_collision=.false. --set run.end_time=3.0e-3 --set "pair.end_rule='paper'")
 for knob in "${knob_list[@]}"; do
   case $knob in
+    noise)
+      # A perturbation far below any knob's effect: how far the chaotic flow alone moves each metric.
+      variant noise base base "$resolved" "$runs" "${quiet[@]}"
+      variant noise perturbed base "$resolved" "$runs" "${quiet[@]}" --set pair.gap=2.000000000002e-6 ;;
     grid)
       mapfile -t sets < <(grid_sets 96 8.4e-6 42); variant grid grid96 grid192 "$resolved" "$runs" "${quiet[@]}" "${sets[@]}"
       variant grid base grid192 "$resolved" "$runs" "${quiet[@]}"
