@@ -25,10 +25,14 @@ summary.json, run.nml and bodies_loads.dat of the variant:
   normal velocity and its rebound ratio -v_after / v_before.
 M = rho_f V diag(k_ax, k_tr, k_tr), Lamb, "Hydrodynamics" (1932), sec. 373 (as the code).
 
+--held ROOT (any batch, no reference; with or without pairs of roots): the drive D_1 + D_2 on its
+agglomerated pairs held in contact, median and largest, and its share of the felt hydrodynamic force.
+
 Usage: .venv/bin/python tools/contact_drift.py NONE_ROOT VARIANT_ROOT [NONE_ROOT VARIANT_ROOT ...]
-           [-o FILE.csv] [--figure DIR] [--label NAME ...]
+           [-o FILE.csv] [--figure DIR] [--label NAME ...] [--held ROOT ...]
 Prints one summary line per pair of batches (runs above 1.01, median ratio, Spearman rank
-correlations of the ratio with each quantity). Exit status: 0 done, 1 unusable input.
+correlations of the ratio with each quantity) and per --held root. Exit status: 0 done, 1
+unusable input.
 """
 import argparse
 import csv
@@ -171,30 +175,11 @@ def _max_speed(directory):
         return max(float(np.max(np.linalg.norm(h5[f"particle{k}/velocity"][:], axis=1))) for k in (1, 2))
 
 
-def analyse_run(run, reference_max_speed):
-    """The COLUMNS of one variant run (module header) given the 'none' run's max particle speed."""
+def pair_drive(run, deck, h):
+    """(m, (M_ax, M_tr, M_tr), rows of D_1 + D_2, rows in contact after the first collision) of a
+    run with a first collision, from its run.nml text and _history; D is zero without the
+    stabilisation (&scene added_mass)."""
     import numpy as np
-    with open(os.path.join(run.directory, "run.nml")) as handle:
-        deck = handle.read()
-    h = _history(run.directory)
-    time = h["time"]
-    speeds = np.stack([np.linalg.norm(h["velocity1"], axis=1), np.linalg.norm(h["velocity2"], axis=1)])
-    particle, row = np.unravel_index(int(np.argmax(speeds)), speeds.shape)
-    start_speed = float(np.max(speeds[:, 0]))
-    row_values = {"batch": os.path.basename(os.path.dirname(run.directory)), "run": os.path.basename(run.directory),
-                  "seed": run.summary["seed"], "shape": run.summary["shape"], "outcome": run.summary["outcome"],
-                  "ratio": float(speeds.max() / reference_max_speed), "max_particle": int(particle) + 1}
-    first = run.summary["first_collision"]
-    if first is None:
-        return row_values
-    t1 = float(first["time"])
-    after = time >= t1
-    row_values["max_after_contact_ms"] = (time[row] - t1) * 1e3
-    row_values["max_share_after_contact"] = (time[row] - t1) / max(time[-1] - t1, 1e-300)
-    com = 0.5 * (h["velocity1"] + h["velocity2"])
-    row_values["com_speed_end"] = float(np.linalg.norm(com[-1]) / start_speed)
-    row_values["relative_speed_end"] = float(np.linalg.norm(h["velocity2"][-1] - h["velocity1"][-1]) / start_speed)
-
     fluid_density = namelist_value(deck, "fluid", "density")
     particle_density = namelist_value(deck, "pair", "density")
     floor = namelist_value(deck, "collision", "detection_floor") or 1.0e-9
@@ -204,11 +189,67 @@ def analyse_run(run, reference_max_speed):
     mass = particle_density * volume
     k = added_mass_coefficients(axial, transverse)
     added = fluid_density * volume * np.array([k[0], k[1], k[1]])
+    drive = np.zeros_like(h["force_dlvo1"])
+    if stabilised:
+        drive = sum(stabilisation_drive(h[f"force_dlvo{p}"], h[f"quaternion{p}"], mass, added) for p in (1, 2))
+    contact = (h["time"] >= float(run.summary["first_collision"]["time"])) & (h["gap"] < EPISODE_FLOORS * floor)
+    return mass, added, drive, contact
 
-    drives = [stabilisation_drive(h[f"force_dlvo{p}"], h[f"quaternion{p}"], mass, added) if stabilised
-              else np.zeros_like(h[f"force_dlvo{p}"]) for p in (1, 2)]
-    drive = drives[0] + drives[1]
-    contact = after & (h["gap"] < EPISODE_FLOORS * floor)
+
+HELD_ROWS = 5               # an agglomerated run counts as held with at least this many rows in contact
+
+
+def held_drive_line(root):
+    """One line for the agglomerated runs of any batch held in contact for HELD_ROWS rows or more:
+    median and largest |mean D| (nN) over their rows in contact, and the median of |mean D| over
+    the mean |felt hydrodynamic force| per particle there."""
+    import numpy as np
+    drives, shares = [], []
+    for run in load_runs([root])[0]:
+        if run.summary["outcome"] != "agglomerated" or run.summary["first_collision"] is None:
+            continue
+        with open(os.path.join(run.directory, "run.nml")) as handle:
+            deck = handle.read()
+        h = _history(run.directory)
+        _, _, drive, contact = pair_drive(run, deck, h)
+        if np.count_nonzero(contact) < HELD_ROWS:
+            continue
+        size = float(np.linalg.norm(drive[contact].mean(axis=0)))
+        felt = np.mean([np.linalg.norm(h[f"force_hydrodynamic{p}"][contact], axis=1).mean() for p in (1, 2)])
+        drives.append(size)
+        shares.append(size / felt if felt > 0 else float("nan"))
+    if not drives:
+        return f"{root}: no agglomerated run held in contact"
+    return (f"{root}: {len(drives)} agglomerated runs held in contact, |D_1 + D_2| median "
+            f"{np.median(drives) * 1e9:.3g} nN, largest {max(drives) * 1e9:.3g} nN, median "
+            f"{np.nanmedian(shares):.2f} of the mean felt hydrodynamic force per particle")
+
+
+def analyse_run(run, reference_max_speed):
+    """The COLUMNS of one variant run (module header) given the 'none' run's max particle speed."""
+    import numpy as np
+    with open(os.path.join(run.directory, "run.nml")) as handle:
+        deck = handle.read()
+    h = _history(run.directory)
+    time = h["time"]
+    if run.summary["first_collision"] is None:
+        raise BatchError(f"{run.directory}: no collision, nothing after a first contact to analyse")
+    speeds = np.stack([np.linalg.norm(h["velocity1"], axis=1), np.linalg.norm(h["velocity2"], axis=1)])
+    particle, row = np.unravel_index(int(np.argmax(speeds)), speeds.shape)
+    start_speed = float(np.max(speeds[:, 0]))
+    row_values = {"batch": os.path.basename(os.path.dirname(run.directory)), "run": os.path.basename(run.directory),
+                  "seed": run.summary["seed"], "shape": run.summary["shape"], "outcome": run.summary["outcome"],
+                  "ratio": float(speeds.max() / reference_max_speed), "max_particle": int(particle) + 1}
+    first = run.summary["first_collision"]
+    t1 = float(first["time"])
+    after = time >= t1
+    row_values["max_after_contact_ms"] = (time[row] - t1) * 1e3
+    row_values["max_share_after_contact"] = (time[row] - t1) / max(time[-1] - t1, 1e-300)
+    com = 0.5 * (h["velocity1"] + h["velocity2"])
+    row_values["com_speed_end"] = float(np.linalg.norm(com[-1]) / start_speed)
+    row_values["relative_speed_end"] = float(np.linalg.norm(h["velocity2"][-1] - h["velocity1"][-1]) / start_speed)
+
+    mass, added, drive, contact = pair_drive(run, deck, h)
     row_values["contact_rows"] = int(np.count_nonzero(contact))
     if np.any(contact):
         row_values["dlvo_N"] = float(np.mean(np.linalg.norm(h["force_dlvo1"][contact], axis=1)))
@@ -250,8 +291,9 @@ def analyse_run(run, reference_max_speed):
 
 
 def analyse_batches(reference_root, variant_root):
-    """Rows of every run complete in both batches, by run name (two run directories: that pair,
-    whatever their names). Raises BatchError when none is common or a pair's seeds differ."""
+    """Rows of every run complete in both batches with a first collision in the variant, by run name
+    (two run directories: that pair, whatever their names). Raises BatchError when none is common
+    or has a collision, or a pair's seeds differ."""
     reference = {os.path.basename(r.directory): r for r in load_runs([reference_root])[0]}
     variant = {os.path.basename(r.directory): r for r in load_runs([variant_root])[0]}
     if (len(reference) == len(variant) == 1 and os.path.exists(os.path.join(reference_root, "summary.json"))
@@ -265,7 +307,10 @@ def analyse_batches(reference_root, variant_root):
         if reference[name].summary["seed"] != variant[name].summary["seed"]:
             raise BatchError(f"{name}: seeds {reference[name].summary['seed']} and "
                              f"{variant[name].summary['seed']} differ: not a paired comparison")
-        rows.append(analyse_run(variant[name], _max_speed(reference[name].directory)))
+        if variant[name].summary["first_collision"] is not None:     # no contact: nothing to explain
+            rows.append(analyse_run(variant[name], _max_speed(reference[name].directory)))
+    if not rows:
+        raise BatchError(f"'{variant_root}': no run with a first collision")
     return rows
 
 
@@ -324,12 +369,22 @@ def scatter_figure(groups, directory):
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("roots", nargs="+", help="pairs of batch roots: NONE_ROOT VARIANT_ROOT ...")
+    parser.add_argument("roots", nargs="*", help="pairs of batch roots: NONE_ROOT VARIANT_ROOT ...")
+    parser.add_argument("--held", action="append", default=[], metavar="ROOT",
+                        help="any batch: the drive on its agglomerated pairs held in contact (no reference)")
     parser.add_argument("--label", action="append", help="a name per pair (default: the variant's directory)")
     parser.add_argument("-o", "--out", help="CSV of every run")
     parser.add_argument("--figure", help="directory of the scatter figure")
     arguments = parser.parse_args(argv)
-    if len(arguments.roots) % 2:
+    try:
+        for root in arguments.held:
+            print(held_drive_line(root))
+    except (BatchError, OSError, KeyError) as error:
+        print(f"contact_drift: {error}", file=sys.stderr)
+        return 1
+    if not arguments.roots and arguments.held:
+        return 0
+    if not arguments.roots or len(arguments.roots) % 2:
         print("contact_drift: the roots come in pairs: NONE_ROOT VARIANT_ROOT", file=sys.stderr)
         return 1
     pairs = list(zip(arguments.roots[0::2], arguments.roots[1::2]))

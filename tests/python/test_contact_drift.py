@@ -148,3 +148,16 @@ def test_contact_drift_refuses_unpaired_roots(spaced_tmp):
     result = run_tool([PYTHON, REPO / "tools" / "contact_drift.py", spaced_tmp / "none"])
     assert result.returncode == 1
     assert "pairs" in result.stderr
+
+
+def test_contact_drift_held_drive_of_any_batch(spaced_tmp):
+    """--held needs no reference: the drift fixture's drive, and a stabilised batch of one run."""
+    write_drifting_run(str(spaced_tmp / "resolved" / "run_0001"), 1, True, lambda t: -0.2 * t)
+    result = run_tool([PYTHON, REPO / "tools" / "contact_drift.py", "--held", spaced_tmp / "resolved"])
+    assert result.returncode == 0, result.stderr
+    volume = 4.0 / 3.0 * math.pi * RADIUS ** 3
+    mass = PARTICLE_DENSITY * volume
+    k = added_mass_coefficients(*semi_axes(RADIUS, 0.2))
+    expected = 9.0e-9 * (mass / (mass + FLUID_DENSITY * volume * k[1]) - mass / (mass + FLUID_DENSITY * volume * k[0]))
+    assert "1 agglomerated runs held in contact" in result.stdout
+    assert f"median {expected * 1e9:.3g} nN" in result.stdout
