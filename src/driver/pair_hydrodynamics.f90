@@ -16,6 +16,7 @@ module pair_hydrodynamics
   use fluid_solver, only: fluid_solver_t
   use forcing_driver, only: forcing_driver_t
   use particle_system, only: particle_system_t, particle_loads_t
+  use rigid_body, only: added_inertia_t
   use checkpoint_files, only: checkpoint_t
   implicit none
   private
@@ -37,6 +38,10 @@ module pair_hydrodynamics
     procedure :: read_checkpoint => no_checkpoint_read
     !> A line for the progress log about the last fluid step's coupling ('' when there is nothing).
     procedure :: progress_text => no_progress_text
+    !> The added masses (body frame) with which the loads move each of the system's bodies beyond
+    !> its own mass: the ones its contact impulses must carry too (module rigid_body, "Impulses in a
+    !> fluid"; none by default: loads that divide by the body's mass alone).
+    procedure :: impulse_inertia => no_impulse_inertia
   end type pair_hydrodynamics_t
 
   abstract interface
@@ -77,6 +82,13 @@ contains
     character(len=:), allocatable :: text
     text = ''
   end function no_progress_text
+
+  function no_impulse_inertia(self, system) result(added)
+    class(pair_hydrodynamics_t), intent(in) :: self
+    type(particle_system_t), intent(in) :: system
+    type(added_inertia_t), allocatable :: added(:)
+    allocate(added(system%n))
+  end function no_impulse_inertia
 
   subroutine no_checkpoint_read(self, restart)
     class(pair_hydrodynamics_t), intent(inout) :: self

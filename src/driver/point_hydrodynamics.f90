@@ -11,6 +11,7 @@ module point_hydrodynamics
   use point_particle_coupling, only: point_coupling_t, point_fluid_t, point_coupling_create, point_coupling_sample, &
                                      point_fluid_at, point_body_loads, sample_start, sample_end
   use pair_hydrodynamics, only: pair_hydrodynamics_t
+  use rigid_body, only: added_inertia_t
   implicit none
   private
   public :: point_hydrodynamics_t, point_hydrodynamics_create
@@ -21,6 +22,7 @@ module point_hydrodynamics
     procedure :: prepare => point_prepare
     procedure :: fluid_step => point_fluid_step
     procedure :: loads => point_loads
+    procedure :: impulse_inertia => point_impulse_inertia
   end type point_hydrodynamics_t
 
 contains
@@ -68,4 +70,18 @@ contains
                             loads%force(:, i), loads%torque(:, i))
     end do
   end subroutine point_loads
+
+  !> With the implicit added mass the loads move each body with m + rho_f V K (no rotational added
+  !> inertia in the point model).
+  function point_impulse_inertia(self, system) result(added)
+    class(point_hydrodynamics_t), intent(in) :: self
+    type(particle_system_t), intent(in) :: system
+    type(added_inertia_t), allocatable :: added(:)
+    integer :: i
+    allocate(added(system%n))
+    if (.not. self%coupling%with_added_mass) return
+    do i = 1, system%n
+      added(i)%mass = self%coupling%added_mass(:, i)
+    end do
+  end function point_impulse_inertia
 end module point_hydrodynamics

@@ -22,6 +22,12 @@
 !> only the difference between the resolved reaction and its estimate is explicit. The load handed
 !> to the particle step is m dU/dt - F_other (I dOmega/dt - T_other), so that the explicit step,
 !> which divides by m (I), moves the body with that acceleration (as point_particle_coupling does).
+!> A contact impulse is a load too: the particle system applies it with the same m + M_a (I + I_a)
+!> (resolved_impulse_inertia; module rigid_body, "Impulses in a fluid"). With the body's mass alone,
+!> the impulse that holds a body against its attraction F_other would be m / (m + M_a) of the
+!> attraction's; two bodies whose M_a along the normal differ cannot both be held by one equal and
+!> opposite impulse, and the held pair drifts under the difference (a face-on calcite disk against
+!> an edge-on one: 0.475 F_other; docs/theory.md, "Contact impulses with the added mass").
 !>
 !> Long fluid steps (&fluid viscous_scheme = 'crank_nicolson'; docs/theory.md, "Crank-Nicolson with
 !> free particles"): the ghost and interior rows of the predictor's system (immersed_predictor) hold
@@ -75,7 +81,6 @@ module resolved_hydrodynamics
   use fluid_solver, only: fluid_solver_t
   use forcing_driver, only: forcing_driver_t, forcing_driver_evaluate, forcing_driver_advance
   use particle_system, only: particle_system_t, particle_loads_t
-  use rigid_body, only: angular_velocity_lab
   use quaternion, only: rotation_matrix, quaternion_from_axis_angle, quaternion_product, quaternion_normalise
   use spheroid, only: spheroid_t
   use icosphere_mesh, only: icosphere_mesh_t, build_icosphere_mesh
@@ -84,6 +89,7 @@ module resolved_hydrodynamics
   use immersed_boundary, only: ibm_settings_t, ibm_set_bodies, ibm_impose, imposition_report_t, ibm_fallback_rows
   use immersed_scene, only: immersed_scene_t, prescribed_motion_t, immersed_scene_create, immersed_step
   use pair_hydrodynamics, only: pair_hydrodynamics_t
+  use rigid_body, only: angular_velocity_lab, added_inertia_t
   use hypre_solver, only: linear_solver_config_t
   implicit none
   private
@@ -134,6 +140,7 @@ module resolved_hydrodynamics
     procedure :: write_checkpoint => resolved_write_checkpoint
     procedure :: read_checkpoint => resolved_read_checkpoint
     procedure :: progress_text => resolved_progress_text
+    procedure :: impulse_inertia => resolved_impulse_inertia
   end type resolved_hydrodynamics_t
 
 contains
@@ -422,6 +429,26 @@ contains
       if (self%dt > 0.0_wp) rate = velocity / self%dt   ! no step yet: no start term (put_back)
     end function start_rate
   end subroutine resolved_loads
+
+  !> With the stabilisation the loads move each body with m + M (I + I_a + ...), M the lagged
+  !> reaction's estimate of the last step (lagged_reaction); its contact impulses carry the same.
+  function resolved_impulse_inertia(self, system) result(added)
+    class(resolved_hydrodynamics_t), intent(in) :: self
+    type(particle_system_t), intent(in) :: system
+    type(added_inertia_t), allocatable :: added(:)
+    real(wp) :: history(3)
+    integer :: i
+    allocate(added(system%n))
+    if (.not. self%stabilise) return
+    do i = 1, system%n
+      call lagged_reaction(self%added_mass(:, i), self%translational_resistance(:, i), &
+                           self%translational_history_length(:, i), self%dt, self%viscosity, self%history_lag, &
+                           added(i)%mass, history)
+      call lagged_reaction(self%added_inertia(:, i), self%rotational_resistance(:, i), &
+                           self%rotational_history_length(:, i), self%dt, self%viscosity, self%history_lag, &
+                           added(i)%inertia, history)
+    end do
+  end function resolved_impulse_inertia
 
   !> The lagged reaction's estimate per body axis (kg, or kg m^2 for rotation; module header):
   !> the impulse / velocity change of a body whose velocity steps at the start of a fluid step,

@@ -53,7 +53,7 @@ module resolved_pair_scene
   use rigid_body, only: set_angular_velocity_lab
   use pair_setup, only: pair_t, build_pair
   use particle_system, only: particle_system_t, particle_loads_t, particle_system_interact, particle_system_step, &
-                             particle_loads_zero
+                             particle_system_set_added_inertia, particle_loads_zero
   use pair_outcome, only: pair_outcome_rules_t, pair_outcome_rules_of
   use particle_output, only: particle_output_t, run_summary_t, particle_output_close, write_summary_json
   use pair_scene, only: pair_loop_t, setup_system, record_interaction, run_finished, sampled, write_sample, &
@@ -161,6 +161,8 @@ contains
       dt_particle = dt / substeps
       step_start = solver%time
       call hydrodynamics%fluid_step(solver, forcing, system, dt)
+      ! The contact impulses of this step's sub-steps carry the added masses its loads move with.
+      call particle_system_set_added_inertia(system, hydrodynamics%impulse_inertia(system))
       call advective_rate(solver, rate, finite)
       if (.not. finite) call stop_run('the velocity field is no longer finite (NaN or infinity) at step ')
       if (dt * rate > cfg%run%cfl_limit) call stop_run('CFL number '//real_text(dt * rate)// &

@@ -42,7 +42,8 @@ module squeeze_case
   use forcing_driver, only: forcing_driver_t
   use rigid_body, only: rigid_body_t, rigid_body_of_spheroid, integrator_euler
   use particle_system, only: particle_system_t, particle_models_t, particle_loads_t, particle_system_create, &
-                             particle_system_interact, particle_system_step, particle_loads_zero
+                             particle_system_interact, particle_system_step, particle_loads_zero, &
+                             particle_system_set_added_inertia
   use lubrication, only: lubrication_model_t
   use resolved_hydrodynamics, only: resolved_hydrodynamics_t, resolved_hydrodynamics_create
   implicit none
@@ -311,6 +312,7 @@ contains
     do step = 1, case%max_steps
       rows(3, step) = 0.5_wp * (system%bodies(1)%velocity(1) - system%bodies(2)%velocity(1))
       call provider%fluid_step(solver, forcing, system, dt)
+      call particle_system_set_added_inertia(system, provider%impulse_inertia(system))
       history%max_sweeps_seen = max(history%max_sweeps_seen, provider%scene%predicted%sweeps)
       lubrication_sum = 0
       do substep = 1, case%substeps

@@ -8,7 +8,10 @@
 !>   K = (1/m1 + 1/m2) I - [r1]x i1^-1 [r1]x - [r2]x i2^-1 [r2]x   (Eq. 20 summed over both bodies)
 !> so that an impulse J (on 2; -J on 1) changes v by -K J. The impulse is applied as
 !> U1 -= J/m1, w1 -= i1^-1 (r1 x J), U2 += J/m2, w2 += i2^-1 (r2 x J): linear and angular momentum
-!> are conserved exactly (both bodies receive it at the same point). Models:
+!> are conserved exactly (both bodies receive it at the same point). With the bodies' added masses
+!> (a fluid whose reaction is taken implicitly, module rigid_body), 1/m_i and i_i^-1 become
+!> R_i (m_i + M_a,i)^-1 R_i^T and R_i (I_i + I_a,i)^-1 R_i^T in K and in the update; the energy is
+!> then that of the bodies and their added masses. Models:
 !>  - 'paper' (Eqs. 23-24): post-collision contact velocity -e v_n n, tangential slip removed:
 !>    J = K^-1 (v + e v_n n). Its energy change is dE = -(v^T M v - e^2 v_n^2 n^T M n)/2 with M = K^-1,
 !>    which can be positive when K couples normal and tangential directions strongly (an eccentric
@@ -23,14 +26,14 @@ module collision
   use agglo_kinds, only: wp
   use vector_algebra, only: skew, cross
   use config_collision, only: collision_config_t
-  use rigid_body, only: rigid_body_t, inverse_inertia_lab, point_velocity, set_angular_velocity_lab, &
-                        angular_velocity_lab, kinetic_energy
+  use rigid_body, only: rigid_body_t, added_inertia_t, inverse_inertia_lab, inverse_mass_lab, point_velocity, &
+                        set_angular_velocity_lab, angular_velocity_lab, kinetic_energy, rigid_body_kick
   use closest_points, only: closest_points_t
   use logger, only: log_line
   implicit none
   private
   public :: collision_model_t, collision_result_t, collision_setup, collision_log_settings, detection_distance, &
-            collision_detected, approach_speed, collide, contact_matrix, contact_impulse
+            collision_detected, approach_speed, collide, contact_matrix, contact_impulse, isotropic_inverse_mass
 
   !> Both take either the closest-points result of the pair or its parts (gap, points, normal).
   interface collision_detected
@@ -120,12 +123,13 @@ contains
   end function collision_detected_contact
 
   !> collide() from the pair's closest points.
-  pure subroutine collide_contact(model, body1, body2, contact, result)
+  pure subroutine collide_contact(model, body1, body2, contact, result, added1, added2)
     type(collision_model_t), intent(in) :: model
     type(rigid_body_t), intent(inout) :: body1, body2
     type(closest_points_t), intent(in) :: contact
     type(collision_result_t), intent(out) :: result
-    call collide_points(model, body1, body2, contact%point1, contact%point2, contact%normal, result)
+    type(added_inertia_t), intent(in), optional :: added1, added2
+    call collide_points(model, body1, body2, contact%point1, contact%point2, contact%normal, result, added1, added2)
   end subroutine collide_contact
 
   !> Normal approach speed of the closest points x1 (on body 1) and x2 (on body 2):
@@ -136,19 +140,27 @@ contains
     approach_speed = dot_product(point_velocity(body1, point1) - point_velocity(body2, point2), normal)
   end function approach_speed
 
-  !> K of the pair at lever arms r1, r2 (docs/physics.md section 6).
-  pure function contact_matrix(inverse_mass_sum, inverse_inertia1, lever1, inverse_inertia2, lever2) result(k)
-    real(wp), intent(in) :: inverse_mass_sum, inverse_inertia1(3, 3), lever1(3), inverse_inertia2(3, 3), lever2(3)
+  !> K of the pair at lever arms r1, r2 (docs/physics.md section 6); inverse_mass: the sum of the
+  !> two bodies' inverse mass tensors (isotropic_inverse_mass(1/m1 + 1/m2) for bodies alone).
+  pure function contact_matrix(inverse_mass, inverse_inertia1, lever1, inverse_inertia2, lever2) result(k)
+    real(wp), intent(in) :: inverse_mass(3, 3), inverse_inertia1(3, 3), lever1(3), inverse_inertia2(3, 3), lever2(3)
     real(wp) :: k(3, 3), s1(3, 3), s2(3, 3)
-    integer :: i
     s1 = skew(lever1)
     s2 = skew(lever2)
-    k = -matmul(s1, matmul(inverse_inertia1, s1)) - matmul(s2, matmul(inverse_inertia2, s2))
-    do i = 1, 3
-      k(i, i) = k(i, i) + inverse_mass_sum
-    end do
+    k = -matmul(s1, matmul(inverse_inertia1, s1)) - matmul(s2, matmul(inverse_inertia2, s2)) + inverse_mass
     k = 0.5_wp * (k + transpose(k))   ! symmetric by construction; remove round-off asymmetry
   end function contact_matrix
+
+  !> The inverse mass tensor s I of bodies without added mass (s = 1/m1 + 1/m2).
+  pure function isotropic_inverse_mass(inverse_mass_sum) result(tensor)
+    real(wp), intent(in) :: inverse_mass_sum
+    real(wp) :: tensor(3, 3)
+    integer :: i
+    tensor = 0.0_wp
+    do i = 1, 3
+      tensor(i, i) = inverse_mass_sum
+    end do
+  end function isotropic_inverse_mass
 
   !> The impulse J (on body 2) for relative contact velocity v (1 minus 2), normal n (1 -> 2) and
   !> contact matrix K; requires v.n > 0. Pure algebra, no bodies (unit-testable with plain matrices).
@@ -216,39 +228,54 @@ contains
   !> Resolve a collision between body1 and body2 with closest points x1, x2 and normal n (1 -> 2):
   !> impulse at x_c = (x1 + x2)/2, both bodies updated in place. Nothing happens if the contact
   !> point is not approaching (result%regime = regime_no_impulse).
-  pure subroutine collide_points(model, body1, body2, point1, point2, normal, result)
+  !> added1, added2 (both or neither): the bodies' added masses, carried through the impulse.
+  pure subroutine collide_points(model, body1, body2, point1, point2, normal, result, added1, added2)
     type(collision_model_t), intent(in) :: model
     type(rigid_body_t), intent(inout) :: body1, body2
     real(wp), intent(in) :: point1(3), point2(3), normal(3)
     type(collision_result_t), intent(out) :: result
+    type(added_inertia_t), intent(in), optional :: added1, added2
     real(wp) :: xc(3), r1(3), r2(3), v(3), k(3, 3), inv1(3, 3), inv2(3, 3), n(3), energy_before
+    logical :: in_fluid
+    in_fluid = present(added1) .and. present(added2)
     n = normal / norm2(normal)
     xc = 0.5_wp * (point1 + point2)
     r1 = xc - body1%position
     r2 = xc - body2%position
     v = point_velocity(body1, xc) - point_velocity(body2, xc)
-    inv1 = inverse_inertia_lab(body1)
-    inv2 = inverse_inertia_lab(body2)
-    k = contact_matrix(1.0_wp / body1%mass + 1.0_wp / body2%mass, inv1, r1, inv2, r2)
+    if (in_fluid) then
+      inv1 = inverse_inertia_lab(body1, added1)
+      inv2 = inverse_inertia_lab(body2, added2)
+      k = contact_matrix(inverse_mass_lab(body1, added1) + inverse_mass_lab(body2, added2), inv1, r1, inv2, r2)
+      energy_before = kinetic_energy(body1, added1) + kinetic_energy(body2, added2)
+    else
+      inv1 = inverse_inertia_lab(body1)
+      inv2 = inverse_inertia_lab(body2)
+      k = contact_matrix(isotropic_inverse_mass(1.0_wp / body1%mass + 1.0_wp / body2%mass), inv1, r1, inv2, r2)
+      energy_before = kinetic_energy(body1) + kinetic_energy(body2)
+    end if
     result%contact_point = xc
     result%normal = n
     result%normal_velocity_before = dot_product(v, n)
-    energy_before = pair_energy(body1, body2)
     call contact_impulse(model, k, v, n, result%impulse, result%regime, result%restitution_used)
     if (result%regime /= regime_no_impulse) then
-      body1%velocity = body1%velocity - result%impulse / body1%mass
-      body2%velocity = body2%velocity + result%impulse / body2%mass
-      call set_angular_velocity_lab(body1, angular_velocity_lab(body1) - matmul(inv1, cross(r1, result%impulse)))
-      call set_angular_velocity_lab(body2, angular_velocity_lab(body2) + matmul(inv2, cross(r2, result%impulse)))
+      if (in_fluid) then
+        call rigid_body_kick(body1, -result%impulse, cross(r1, -result%impulse), 1.0_wp, added1)
+        call rigid_body_kick(body2, result%impulse, cross(r2, result%impulse), 1.0_wp, added2)
+      else
+        body1%velocity = body1%velocity - result%impulse / body1%mass
+        body2%velocity = body2%velocity + result%impulse / body2%mass
+        call set_angular_velocity_lab(body1, angular_velocity_lab(body1) - matmul(inv1, cross(r1, result%impulse)))
+        call set_angular_velocity_lab(body2, angular_velocity_lab(body2) + matmul(inv2, cross(r2, result%impulse)))
+      end if
     end if
     result%normal_velocity_after = dot_product(point_velocity(body1, xc) - point_velocity(body2, xc), n)
-    result%energy_change = pair_energy(body1, body2) - energy_before
+    if (in_fluid) then
+      result%energy_change = kinetic_energy(body1, added1) + kinetic_energy(body2, added2) - energy_before
+    else
+      result%energy_change = kinetic_energy(body1) + kinetic_energy(body2) - energy_before
+    end if
   end subroutine collide_points
-
-  pure real(wp) function pair_energy(body1, body2)
-    type(rigid_body_t), intent(in) :: body1, body2
-    pair_energy = kinetic_energy(body1) + kinetic_energy(body2)
-  end function pair_energy
 
   !> Inverse of a 3x3 matrix by cofactors (K is symmetric positive definite: m > 0, I > 0).
   pure function inverse3(a) result(b)

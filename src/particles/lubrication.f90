@@ -29,16 +29,18 @@
 !> body 1) with j = R_sub dt v_n' and v_n' = v_n - (n^T K_c n) j (K_c the contact matrix of the
 !> collision module, inverse masses and inertias at x_c), i.e. j = R_sub dt v_n / (1 + R_sub dt n^T K_c n).
 !> The force reported is j n / dt. Linear and angular momentum are conserved exactly; the kinetic
-!> energy never grows (the impulse only damps v_n).
+!> energy never grows (the impulse only damps v_n). With the bodies' added masses (module
+!> collision) K_c and the kick carry them as a collision does.
 module lubrication
   use agglo_kinds, only: wp
   use physical_constants, only: pi
   use vector_algebra, only: cross
   use quaternion, only: rotation_matrix
   use spheroid, only: spheroid_t, principal_curvatures, principal_directions
-  use rigid_body, only: rigid_body_t, point_velocity, inverse_inertia_lab, rigid_body_kick
+  use rigid_body, only: rigid_body_t, added_inertia_t, point_velocity, inverse_inertia_lab, inverse_mass_lab, &
+                        rigid_body_kick
   use closest_points, only: closest_points_t
-  use collision, only: contact_matrix
+  use collision, only: contact_matrix, isotropic_inverse_mass
   use config_collision, only: collision_config_t
   use logger, only: log_line
   implicit none
@@ -167,13 +169,14 @@ contains
   end function lubrication_subgrid_resistance
 
   !> Apply the lubrication impulse of one step dt to both bodies (implicit in v_n; module header).
-  pure subroutine lubricate(model, shape1, body1, shape2, body2, contact, dt, result)
+  pure subroutine lubricate(model, shape1, body1, shape2, body2, contact, dt, result, added1, added2)
     type(lubrication_model_t), intent(in) :: model
     type(spheroid_t), intent(in) :: shape1, shape2
     type(rigid_body_t), intent(inout) :: body1, body2
     type(closest_points_t), intent(in) :: contact
     real(wp), intent(in) :: dt
     type(lubrication_result_t), intent(out) :: result
+    type(added_inertia_t), intent(in), optional :: added1, added2   !< both or neither (module collision)
     real(wp) :: n(3), r1(3), r2(3), k(3, 3), normal_speed, j
     if (contact%gap >= model%outer_gap) return
     result%active = .true.
@@ -184,13 +187,23 @@ contains
     r1 = result%point - body1%position
     r2 = result%point - body2%position
     normal_speed = dot_product(point_velocity(body1, result%point) - point_velocity(body2, result%point), n)
-    k = contact_matrix(1.0_wp / body1%mass + 1.0_wp / body2%mass, inverse_inertia_lab(body1), r1, &
-                       inverse_inertia_lab(body2), r2)
+    if (present(added1) .and. present(added2)) then
+      k = contact_matrix(inverse_mass_lab(body1, added1) + inverse_mass_lab(body2, added2), &
+                         inverse_inertia_lab(body1, added1), r1, inverse_inertia_lab(body2, added2), r2)
+    else
+      k = contact_matrix(isotropic_inverse_mass(1.0_wp / body1%mass + 1.0_wp / body2%mass), inverse_inertia_lab(body1), &
+                         r1, inverse_inertia_lab(body2), r2)
+    end if
     j = result%resistance * dt * normal_speed / (1.0_wp + result%resistance * dt * dot_product(n, matmul(k, n)))
     result%force = j / dt * n
     result%torque1 = cross(r1, -result%force)
     result%torque2 = cross(r2, result%force)
-    call rigid_body_kick(body1, -result%force, result%torque1, dt)
-    call rigid_body_kick(body2, result%force, result%torque2, dt)
+    if (present(added1) .and. present(added2)) then
+      call rigid_body_kick(body1, -result%force, result%torque1, dt, added1)
+      call rigid_body_kick(body2, result%force, result%torque2, dt, added2)
+    else
+      call rigid_body_kick(body1, -result%force, result%torque1, dt)
+      call rigid_body_kick(body2, result%force, result%torque2, dt)
+    end if
   end subroutine lubricate
 end module lubrication

@@ -36,7 +36,7 @@ module particle_system
   use agglo_kinds, only: wp, i8
   use error_handling, only: fatal
   use spheroid, only: spheroid_t
-  use rigid_body, only: rigid_body_t, rigid_body_step, kinetic_energy
+  use rigid_body, only: rigid_body_t, added_inertia_t, rigid_body_step, kinetic_energy
   use closest_points, only: closest_points_t, find_closest_points
   use dlvo, only: dlvo_model_t, dlvo_evaluation_t, dlvo_evaluate
   use collision, only: collision_model_t, collision_result_t, collision_detected, collide
@@ -47,7 +47,7 @@ module particle_system
   private
   public :: particle_models_t, particle_pair_t, particle_loads_t, particle_system_t, particle_system_create, &
             particle_system_interact, particle_system_step, particle_loads_zero, &
-            unwrapped_position, pair_image, pair_body_image, particle_system_energy
+            unwrapped_position, pair_image, pair_body_image, particle_system_energy, particle_system_set_added_inertia
 
   !> The pair models and how the bodies move; set up once by the scene.
   type :: particle_models_t
@@ -93,6 +93,11 @@ module particle_system
     type(particle_loads_t) :: lubrication_loads          !< lubrication impulse / dt of the last interaction
     integer :: collisions_last = 0                       !< impulses in the last interaction
     integer(i8) :: collisions_total = 0_i8               !< impulses since creation
+    !> (n) the fluid's added masses that collision and lubrication impulses move with each body
+    !> (module rigid_body, added_inertia_t): zero (bodies alone) unless a coupling that takes the
+    !> added mass implicitly sets them (particle_system_set_added_inertia)
+    type(added_inertia_t), allocatable :: impulse_added(:)
+    logical :: impulses_in_fluid = .false.               !< some impulse_added is non-zero
   end type particle_system_t
 
 contains
@@ -150,7 +155,27 @@ contains
     system%dlvo_loads = particle_loads_zero(system%n)
     system%collision_loads = particle_loads_zero(system%n)
     system%lubrication_loads = particle_loads_zero(system%n)
+    allocate(system%impulse_added(system%n))
   end subroutine particle_system_create
+
+  !> The added masses the bodies' contact and lubrication impulses carry from now on (one per body,
+  !> body frame): those with which the coupling moves the bodies under their loads, so that an
+  !> impulse and a load meet the same inertia (module rigid_body, "Impulses in a fluid").
+  subroutine particle_system_set_added_inertia(system, added)
+    type(particle_system_t), intent(inout) :: system
+    type(added_inertia_t), intent(in) :: added(:)
+    integer :: i
+    if (size(added) /= system%n) call fatal('particle_system_set_added_inertia: one added inertia per body is required')
+    do i = 1, system%n
+      if (any(added(i)%mass < 0.0_wp) .or. any(added(i)%inertia < 0.0_wp)) &
+        call fatal('particle_system_set_added_inertia: added masses and inertias must be >= 0')
+    end do
+    system%impulse_added = added
+    system%impulses_in_fluid = .false.
+    do i = 1, system%n
+      if (any(added(i)%mass > 0.0_wp) .or. any(added(i)%inertia > 0.0_wp)) system%impulses_in_fluid = .true.
+    end do
+  end subroutine particle_system_set_added_inertia
 
   !> One particle step of length dt (module header): Newton-Euler under external + DLVO loads, then
   !> the pair interactions of the new state. external: (3, n) loads held fixed over the call;
@@ -249,7 +274,12 @@ contains
     second = pair_body_image(system, pair)
     if (.not. collision_detected(system%models%collision_model, system%bodies(pair%first), second, pair%contact, dt)) &
       return
-    call collide(system%models%collision_model, system%bodies(pair%first), second, pair%contact, pair%collision)
+    if (system%impulses_in_fluid) then
+      call collide(system%models%collision_model, system%bodies(pair%first), second, pair%contact, pair%collision, &
+                   system%impulse_added(pair%first), system%impulse_added(pair%second))
+    else
+      call collide(system%models%collision_model, system%bodies(pair%first), second, pair%contact, pair%collision)
+    end if
     system%bodies(pair%second)%velocity = second%velocity
     system%bodies(pair%second)%angular_velocity_body = second%angular_velocity_body
     pair%collided = .true.
@@ -276,8 +306,14 @@ contains
     pair%lubrication = lubrication_result_t()
     if (.not. (system%models%lubrication .and. pair%active)) return
     second = pair_body_image(system, pair)
-    call lubricate(system%models%lubrication_model, system%shapes(pair%first), system%bodies(pair%first), &
-                   system%shapes(pair%second), second, pair%contact, dt, pair%lubrication)
+    if (system%impulses_in_fluid) then
+      call lubricate(system%models%lubrication_model, system%shapes(pair%first), system%bodies(pair%first), &
+                     system%shapes(pair%second), second, pair%contact, dt, pair%lubrication, &
+                     system%impulse_added(pair%first), system%impulse_added(pair%second))
+    else
+      call lubricate(system%models%lubrication_model, system%shapes(pair%first), system%bodies(pair%first), &
+                     system%shapes(pair%second), second, pair%contact, dt, pair%lubrication)
+    end if
     system%bodies(pair%second)%velocity = second%velocity
     system%bodies(pair%second)%angular_velocity_body = second%angular_velocity_body
     associate (loads => system%lubrication_loads)

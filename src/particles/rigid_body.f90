@@ -15,6 +15,13 @@
 !>    frozen over the step, e.g. hydrodynamic loads in sub-steps); a driver with position-dependent
 !>    forces (DLVO) gets second order with rigid_body_kick(h/2) -> rigid_body_drift(h) ->
 !>    new loads -> rigid_body_kick(h/2) (velocity Verlet).
+!> Impulses in a fluid (added_inertia_t): a coupling that takes the fluid's added mass implicitly
+!> moves a body under its loads with m + M_a (I + I_a), body frame. A contact or lubrication impulse
+!> must then move the body with the same masses, or the contact that balances an attraction leaves
+!> a net force on a held pair whose two added masses differ along the normal (docs/theory.md,
+!> "Contact impulses with the added mass"). inverse_mass_lab, inverse_inertia_lab, rigid_body_kick
+!> and kinetic_energy take the added masses as an option; without it they do exactly the arithmetic
+!> of the body alone.
 module rigid_body
   use agglo_kinds, only: wp
   use vector_algebra, only: cross, outer
@@ -26,9 +33,16 @@ module rigid_body
   public :: rigid_body_t, rigid_body_init, rigid_body_of_spheroid, rigid_body_step, rigid_body_kick, rigid_body_drift, &
             angular_velocity_lab, set_angular_velocity_lab, inverse_inertia_lab, point_velocity, &
             kinetic_energy, translational_kinetic_energy, rotational_kinetic_energy, linear_momentum, &
-            angular_momentum, integrator_code, integrator_euler, integrator_verlet
+            angular_momentum, integrator_code, integrator_euler, integrator_verlet, added_inertia_t, inverse_mass_lab
 
   integer, parameter :: integrator_euler = 1, integrator_verlet = 2
+
+  !> The fluid's added mass and added moments of inertia of a body along its principal axes (body
+  !> frame): what an impulse moves with the body when the fluid's reaction is taken implicitly.
+  type :: added_inertia_t
+    real(wp) :: mass(3) = 0.0_wp       !< kg
+    real(wp) :: inertia(3) = 0.0_wp    !< kg m^2
+  end type added_inertia_t
 
   type :: rigid_body_t
     real(wp) :: mass = 0.0_wp                       !< kg
@@ -88,17 +102,34 @@ contains
     body%angular_velocity_body = rotate_to_body(body%quaternion, omega)
   end subroutine set_angular_velocity_lab
 
-  !> Inverse lab inertia tensor i^-1 = R I^-1 R^T (i = R I R^T: paper, after Eq. 20).
-  pure function inverse_inertia_lab(body) result(inverse)
+  !> Inverse lab inertia tensor i^-1 = R I^-1 R^T (i = R I R^T: paper, after Eq. 20); with added,
+  !> R (I + I_a)^-1 R^T.
+  pure function inverse_inertia_lab(body, added) result(inverse)
     type(rigid_body_t), intent(in) :: body
+    type(added_inertia_t), intent(in), optional :: added
+    real(wp) :: inverse(3, 3), r(3, 3), moments(3)
+    integer :: k
+    r = rotation_matrix(body%quaternion)
+    moments = body%inertia_body
+    if (present(added)) moments = moments + added%inertia
+    inverse = 0.0_wp
+    do k = 1, 3
+      inverse = inverse + outer(r(:, k), r(:, k)) / moments(k)
+    end do
+  end function inverse_inertia_lab
+
+  !> Inverse lab mass tensor of a body carrying its added mass, R (m + M_a)^-1 R^T.
+  pure function inverse_mass_lab(body, added) result(inverse)
+    type(rigid_body_t), intent(in) :: body
+    type(added_inertia_t), intent(in) :: added
     real(wp) :: inverse(3, 3), r(3, 3)
     integer :: k
     r = rotation_matrix(body%quaternion)
     inverse = 0.0_wp
     do k = 1, 3
-      inverse = inverse + outer(r(:, k), r(:, k)) / body%inertia_body(k)
+      inverse = inverse + outer(r(:, k), r(:, k)) / (body%mass + added%mass(k))
     end do
-  end function inverse_inertia_lab
+  end function inverse_mass_lab
 
   !> Lab velocity of the material point at lab position x: U + omega x (x - X).
   pure function point_velocity(body, point) result(u)
@@ -118,9 +149,17 @@ contains
     rotational_kinetic_energy = 0.5_wp * sum(body%inertia_body * body%angular_velocity_body**2)
   end function rotational_kinetic_energy
 
-  pure real(wp) function kinetic_energy(body)
+  !> With added: the kinetic energy of the body and of the fluid its added mass stands for,
+  !> (U_b . (m + M_a) U_b + Omega_b . (I + I_a) Omega_b) / 2, body frame.
+  pure real(wp) function kinetic_energy(body, added)
     type(rigid_body_t), intent(in) :: body
+    type(added_inertia_t), intent(in), optional :: added
+    real(wp) :: velocity_body(3)
     kinetic_energy = translational_kinetic_energy(body) + rotational_kinetic_energy(body)
+    if (.not. present(added)) return
+    velocity_body = rotate_to_body(body%quaternion, body%velocity)
+    kinetic_energy = kinetic_energy + 0.5_wp * (sum(added%mass * velocity_body**2) &
+                                                + sum(added%inertia * body%angular_velocity_body**2))
   end function kinetic_energy
 
   pure function linear_momentum(body) result(p)
@@ -161,9 +200,17 @@ contains
   end subroutine rigid_body_step
 
   !> Kick: U += F/m h and L_body += R^T T h (orientation fixed).
-  pure subroutine rigid_body_kick(body, force, torque, h)
+  pure subroutine rigid_body_kick(body, force, torque, h, added)
     type(rigid_body_t), intent(inout) :: body
     real(wp), intent(in) :: force(3), torque(3), h
+    type(added_inertia_t), intent(in), optional :: added
+    if (present(added)) then   ! along the principal axes, where m + M_a and I + I_a are diagonal
+      body%velocity = body%velocity + rotate_to_lab(body%quaternion, &
+                                                    h * rotate_to_body(body%quaternion, force) / (body%mass + added%mass))
+      body%angular_velocity_body = body%angular_velocity_body &
+                                   + h * rotate_to_body(body%quaternion, torque) / (body%inertia_body + added%inertia)
+      return
+    end if
     body%velocity = body%velocity + h * force / body%mass
     body%angular_velocity_body = body%angular_velocity_body + h * rotate_to_body(body%quaternion, torque) / body%inertia_body
   end subroutine rigid_body_kick

@@ -1,6 +1,8 @@
 !> Unit tests of collision: restitution of head-on spheres, conservation laws and energy in random
-!> oblique spheroid collisions (all three models), the dynamic detection distance, and a sphere
-!> pair with DLVO + collisions run at time steps from 1e-9 to 1e-5 s (no NaN, no overlap left).
+!> oblique spheroid collisions (all three models), the same with random added masses and inertias
+!> carried through the impulse (the momentum and energy of bodies and added masses, module
+!> rigid_body "Impulses in a fluid"), the dynamic detection distance, and a sphere pair with DLVO +
+!> collisions run at time steps from 1e-9 to 1e-5 s (no NaN, no overlap left).
 program test_collision
   use agglo_kinds, only: wp
   use physical_constants, only: pi
@@ -11,7 +13,7 @@ program test_collision
                        regime_elastic_limit
   use dlvo, only: dlvo_model_t, dlvo_setup, dlvo_pair_forces
   use rigid_body, only: rigid_body_t, rigid_body_init, rigid_body_step, kinetic_energy, linear_momentum, &
-                        angular_momentum, integrator_euler, integrator_verlet
+                        angular_momentum, integrator_euler, integrator_verlet, added_inertia_t
   use quaternion, only: rotate_to_lab, rotate_to_body, quaternion_normalise
   use random_stream, only: random_stream_t, stream_seed, stream_uniform, stream_normal
   use test_framework, only: test_start, test_finish, check, check_close, check_below, check_equal
@@ -71,6 +73,8 @@ program test_collision
   call random_collisions('frictionless', 0.4_wp)
   call random_collisions('frictionless', 1.0_wp)
   call random_collisions('coulomb', 0.4_wp)
+  call random_collisions('paper', 0.4_wp, in_fluid=.true.)
+  call random_collisions('coulomb', 0.4_wp, in_fluid=.true.)
 
   ! Sphere pair with DLVO and collisions at dt = 1e-9 ... 1e-5 s.
   call sphere_pair_time_steps()
@@ -111,9 +115,14 @@ contains
   !> exact common-normal points (a random surface point of body 1; body 2 placed so that its point
   !> with normal -n coincides, 1 nm further along n), with random velocities whose contact point
   !> approaches. Momentum about the origin before/after and energy after <= before.
-  subroutine random_collisions(model_name, restitution)
+  !> in_fluid: each body also carries random added masses and inertias (0 to 3 times its own, per
+  !> axis); momentum and energy are then those of the bodies with their added masses.
+  subroutine random_collisions(model_name, restitution, in_fluid)
     character(len=*), intent(in) :: model_name
     real(wp), intent(in) :: restitution
+    logical, intent(in), optional :: in_fluid
+    type(added_inertia_t) :: added1, added2
+    logical :: fluid
     type(collision_config_t) :: config
     type(collision_model_t) :: m
     type(rigid_body_t) :: s1, s2
@@ -125,6 +134,8 @@ contains
     real(wp) :: theta, phi, u1(3), u2(3), w1(3), w2(3), mass1, mass2
     integer :: trial, count_collisions, count_limited, count_slide
     character(len=32) :: tag
+    fluid = .false.
+    if (present(in_fluid)) fluid = in_fluid
     config = collision_config_t(restitution=restitution, model=model_name, friction_coefficient=0.2_wp)
     call collision_setup(m, config)
     call stream_seed(stream, 12345_8, stream_id=3)
@@ -158,18 +169,27 @@ contains
       s1%angular_velocity_body = rotate_to_body(q1, w1)
       s2%angular_velocity_body = rotate_to_body(q2, w2)
       if (approach_speed(s1, s2, 0.5_wp * (x1 + x2), 0.5_wp * (x1 + x2), normal) <= 0.0_wp) cycle
-      p0 = linear_momentum(s1) + linear_momentum(s2)
-      l0 = angular_momentum(s1) + angular_momentum(s2)
-      e0 = kinetic_energy(s1) + kinetic_energy(s2)
-      scale_p = norm2(linear_momentum(s1)) + norm2(linear_momentum(s2))
-      scale_l = norm2(angular_momentum(s1)) + norm2(angular_momentum(s2))
-      call collide(m, s1, s2, x1, x2, normal, res)
+      added1 = added_inertia_t(); added2 = added_inertia_t()
+      if (fluid) then
+        added1 = added_inertia_t(3.0_wp * mass1 * random3(stream), 3.0_wp * s1%inertia_body * random3(stream))
+        added2 = added_inertia_t(3.0_wp * mass2 * random3(stream), 3.0_wp * s2%inertia_body * random3(stream))
+      end if
+      p0 = momentum(s1, added1) + momentum(s2, added2)
+      l0 = moment_of_momentum(s1, added1) + moment_of_momentum(s2, added2)
+      e0 = kinetic_energy(s1, added1) + kinetic_energy(s2, added2)
+      scale_p = norm2(momentum(s1, added1)) + norm2(momentum(s2, added2))
+      scale_l = norm2(moment_of_momentum(s1, added1)) + norm2(moment_of_momentum(s2, added2))
+      if (fluid) then
+        call collide(m, s1, s2, x1, x2, normal, res, added1, added2)
+      else
+        call collide(m, s1, s2, x1, x2, normal, res)
+      end if
       count_collisions = count_collisions + 1
       if (res%regime == regime_elastic_limit) count_limited = count_limited + 1
       if (res%regime == regime_slide) count_slide = count_slide + 1
-      worst_p = max(worst_p, norm2(linear_momentum(s1) + linear_momentum(s2) - p0) / scale_p)
-      worst_l = max(worst_l, norm2(angular_momentum(s1) + angular_momentum(s2) - l0) / scale_l)
-      worst_e = max(worst_e, (kinetic_energy(s1) + kinetic_energy(s2) - e0) / e0)
+      worst_p = max(worst_p, norm2(momentum(s1, added1) + momentum(s2, added2) - p0) / scale_p)
+      worst_l = max(worst_l, norm2(moment_of_momentum(s1, added1) + moment_of_momentum(s2, added2) - l0) / scale_l)
+      worst_e = max(worst_e, (kinetic_energy(s1, added1) + kinetic_energy(s2, added2) - e0) / e0)
       ! Normal restitution: exact for every model unless the elastic limit lowered e.
       if (res%regime /= regime_elastic_limit) worst_post = max(worst_post, &
           abs(res%normal_velocity_after + restitution * res%normal_velocity_before) / abs(res%normal_velocity_before))
@@ -178,6 +198,7 @@ contains
     end do
     write(tag, '(f3.1)') restitution
     tag = trim(model_name)//'_e'//trim(tag)
+    if (fluid) tag = trim(tag)//'_in_fluid'
     write(*, '(a,a,i0,a,i0,a,i0,a,3es10.2)') trim(tag), ': collisions ', count_collisions, ', elastic limit ', &
         count_limited, ', sliding ', count_slide, '; worst dP, dL, dE/E = ', worst_p, worst_l, worst_e
     call check(count_collisions > 500, 'random_'//trim(tag)//'_enough_collisions')
@@ -189,6 +210,39 @@ contains
     if (restitution == 1.0_wp .and. model_name == 'frictionless') &
         call check_below(worst_e_elastic, 1.0e-13_wp, 'random_frictionless_e1_conserves_energy')
   end subroutine random_collisions
+
+  !> Uniform random numbers in [0, 1), three of them.
+  function random3(stream) result(values)
+    type(random_stream_t), intent(inout) :: stream
+    real(wp) :: values(3)
+    integer :: i
+    do i = 1, 3
+      values(i) = stream_uniform(stream)
+    end do
+  end function random3
+
+  !> Linear momentum of a body and its added mass, R (m + M_a) R^T U.
+  pure function momentum(body, added) result(p)
+    type(rigid_body_t), intent(in) :: body
+    type(added_inertia_t), intent(in) :: added
+    real(wp) :: p(3)
+    p = rotate_to_lab(body%quaternion, (body%mass + added%mass) * rotate_to_body(body%quaternion, body%velocity))
+  end function momentum
+
+  !> Angular momentum about the origin of a body and its added mass: X x p + R (I + I_a) Omega_b.
+  pure function moment_of_momentum(body, added) result(l)
+    type(rigid_body_t), intent(in) :: body
+    type(added_inertia_t), intent(in) :: added
+    real(wp) :: l(3)
+    l = cross3(body%position, momentum(body, added)) &
+        + rotate_to_lab(body%quaternion, (body%inertia_body + added%inertia) * body%angular_velocity_body)
+  end function moment_of_momentum
+
+  pure function cross3(a, b) result(c)
+    real(wp), intent(in) :: a(3), b(3)
+    real(wp) :: c(3)
+    c = [a(2) * b(3) - a(3) * b(2), a(3) * b(1) - a(1) * b(3), a(1) * b(2) - a(2) * b(1)]
+  end function cross3
 
   pure function semi_axes(aspect_ratio) result(axes)
     real(wp), intent(in) :: aspect_ratio
