@@ -165,8 +165,9 @@ contains
   end function local_rotation
 
   !> Force and torque (lab frame, about the centre) on body i in the flow `fluid` (module header).
-  !> other_force: the body's non-hydrodynamic force over the step (N: the DLVO load; collisions are
-  !> impulses and see the body's own mass), needed by the implicit added mass only.
+  !> other_force: the body's non-hydrodynamic force over the step (N: the DLVO load; collision
+  !> impulses carry the same added mass, driver point_hydrodynamics: impulse_inertia), needed by the
+  !> implicit added mass only.
   pure subroutine point_body_loads(coupling, i, body, fluid, other_force, force, torque)
     type(point_coupling_t), intent(in) :: coupling
     integer, intent(in) :: i
