@@ -134,12 +134,12 @@ def test_projection_leaves_a_round_off_divergence_and_keeps_the_mean(method):
         assert float(np.max(np.abs(curl))) * cell < ROUND_OFF * largest({"u": du, "v": dv, "w": pw - w})
 
 
-def solenoidal_random_field(shape, seed=3):
+def solenoidal_random_field(shape, seed=3, box=BOX):
     """A random velocity on the grid, discretely divergence-free (as a converged field of the code
     is), with a random pressure: every Fourier mode including the Nyquist ones is populated."""
     rng = np.random.default_rng(seed)
-    u, v, w = project(*(rng.standard_normal(shape) for _ in range(3)), BOX, "discrete")
-    return {"u": u, "v": v, "w": w, "pressure": rng.standard_normal(shape), "shape": shape, "box": BOX,
+    u, v, w = project(*(rng.standard_normal(shape) for _ in range(3)), box, "discrete")
+    return {"u": u, "v": v, "w": w, "pressure": rng.standard_normal(shape), "shape": shape, "box": box,
             "time": 0.125, "forcing_state": np.arange(20, dtype=np.int64)}
 
 
