@@ -275,7 +275,7 @@ study_batch() {
       fi
       return 0 ;;
     slurm)
-      [ -n "$field" ] && study_forced_field "$field" "$nx"
+      if [ -n "$field" ]; then study_forced_field "$field" "$nx" || { study_status_all=1; return 0; }; fi
       local -a slurm=(--slurm --time "${study_time:-120}")
       (( study_jobs_given )) && slurm+=(--jobs "$study_jobs")
       local option; for option in "${study_sbatch_options[@]}"; do slurm+=(--sbatch-option "$option"); done

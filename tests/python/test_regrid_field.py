@@ -13,10 +13,10 @@ import pytest
 
 from conftest import REPO, run_tool
 from regrid_field import OFFSETS, discrete_divergence, kinetic_energy, project, regrid, resample
+from synthetic_fields import BOX, solenoidal_random_field, write_final_field
 
 PYTHON = REPO / ".venv" / "bin" / "python"
 TOOL = REPO / "tools" / "regrid_field.py"
-BOX = (1.0e-3, 2.0e-3, 1.5e-3)          # m, deliberately not a cube
 ROUND_OFF = 1e-12                       # relative to the field's largest value
 
 
@@ -134,15 +134,6 @@ def test_projection_leaves_a_round_off_divergence_and_keeps_the_mean(method):
         assert float(np.max(np.abs(curl))) * cell < ROUND_OFF * largest({"u": du, "v": dv, "w": pw - w})
 
 
-def solenoidal_random_field(shape, seed=3, box=BOX):
-    """A random velocity on the grid, discretely divergence-free (as a converged field of the code
-    is), with a random pressure: every Fourier mode including the Nyquist ones is populated."""
-    rng = np.random.default_rng(seed)
-    u, v, w = project(*(rng.standard_normal(shape) for _ in range(3)), box, "discrete")
-    return {"u": u, "v": v, "w": w, "pressure": rng.standard_normal(shape), "shape": shape, "box": box,
-            "time": 0.125, "forcing_state": np.arange(20, dtype=np.int64)}
-
-
 def test_round_trip_to_a_finer_grid_and_back_returns_the_field():
     """128 -> 192 -> 128 in miniature (the same 2 : 3 ratio, 32 -> 48 -> 32): every sample back to
     round-off with the default projection, although each leg changed the field by its projection.
@@ -157,18 +148,6 @@ def test_round_trip_to_a_finer_grid_and_back_returns_the_field():
     finer, _ = regrid(field, (48, 48, 48), "discrete")
     back, _ = regrid(finer, (32, 32, 32), "discrete")
     assert max(float(np.max(np.abs(back[c] - field[c]))) for c in "uvw") > 1e-4 * scale
-
-
-def write_final_field(path, field):
-    """field in the layout of the code's final_field.h5 (forcing_driver_finish): h5py's C order
-    holds the Fortran (nx, ny, nz) arrays as [k, j, i]."""
-    with h5py.File(path, "w") as handle:
-        for name in ("u", "v", "w", "pressure"):
-            handle.create_dataset(f"fluid/{name}", data=np.ascontiguousarray(field[name].T))
-        handle.create_dataset("fluid/grid_shape", data=np.asarray(field["shape"], dtype=np.int32))
-        handle.create_dataset("fluid/box_length", data=np.asarray(field["box"]))
-        handle.create_dataset("fluid/time", data=field["time"])
-        handle.create_dataset("forcing/state", data=field["forcing_state"])
 
 
 def test_command_line_round_trip_and_layout(spaced_tmp):

@@ -17,6 +17,7 @@ from agglo_stats import contact_episodes, lever_arm
 from conftest import AGGLO_STATS, REPO, run_tool
 from fake_pair_scene import write_run
 from speed_accuracy import pareto_front
+from synthetic_fields import solenoidal_random_field, write_final_field
 
 PYTHON = REPO / ".venv" / "bin" / "python"
 
@@ -305,7 +306,6 @@ def test_study_regrids_an_existing_base_field_at_once(spaced_tmp):
     """With the base decks' field present, the grid variants' fields are made when the script
     runs (tools/regrid_field.py, seconds), also under --slurm: the batch then waits for nothing.
     A tiny synthetic base field (8^3, same box) stands in for the converged 128^3 one."""
-    from test_regrid_field import solenoidal_random_field, write_final_field
     work, out = spaced_tmp / "work", spaced_tmp / "sa"
     (work / "output" / "hit_box_128").mkdir(parents=True)
     (work / "input").symlink_to(REPO / "input")
