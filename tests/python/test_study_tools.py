@@ -336,6 +336,22 @@ def test_study_regrids_an_existing_base_field_at_once(spaced_tmp):
     assert regridded.stat().st_mtime_ns == before
 
 
+def test_study_without_a_usable_base_field_schedules_no_grid_batch(spaced_tmp):
+    """A base field that tools/regrid_field.py cannot read: the study says so, exits 1, and writes
+    no Slurm script for the batches that would start from the missing resampled field."""
+    work, out = spaced_tmp / "work", spaced_tmp / "sa"
+    (work / "output" / "hit_box_128").mkdir(parents=True)
+    (work / "input").symlink_to(REPO / "input")
+    (work / "output" / "hit_box_128" / "final_field.h5").write_text("not a field\n")
+    result = run_tool([REPO / "tools" / "speed-accuracy-study.sh", "-o", out, "-N", "2", "--shapes", "disk",
+                       "--knobs", "grid", "--runs-256", "0", "--slurm", "--only", "grid96"], cwd=work)
+    assert result.returncode == 1, result.stderr + result.stdout
+    assert "regridded field output/hit_box_128_on_96/final_field.h5 failed" in result.stderr
+    assert "not an HDF5 file" in (out / "regrid_field_hit_box_128_on_96.log").read_text()
+    assert not (out / "disk-grid96" / "montecarlo.sbatch").exists()
+    assert not (work / "output" / "hit_box_128_on_96").exists()
+
+
 def test_study_runs_resumes_and_records_costs(spaced_tmp, agglo, monkeypatch):
     out = spaced_tmp / "q"
     published = spaced_tmp / "published"
