@@ -194,7 +194,8 @@ def project(u, v, w, box, method="continuous"):
         directions = [2.0 * np.sin(angles[d] / 2.0) / steps[d] for d in range(3)]
     else:
         raise ValueError(f"unknown projection '{method}'")
-    # sum_d 2i sin(theta_d/2)/h_d e_d: > 0 except at k = 0 (sin(theta/2) has the sign of k for |theta| <= pi)
+    # sum_d 2i sin(theta_d/2)/h_d e_d: i times a positive number except at k = 0 (sin(theta/2) and
+    # e_d have the sign of k_d for |theta| <= pi), so alpha is well defined
     symbol = sum(2j * np.sin(angles[d] / 2.0) / steps[d] * directions[d] for d in range(3))
     symbol[0, 0, 0] = 1.0
     alpha = divergence / symbol

@@ -223,7 +223,8 @@ study_regridded_field() {
         } > "$script"
         chmod +x "$script"
         study_field_jobs[$file]=$job
-        study_submit_lines+=("$job=\$(sbatch --parsable --dependency=afterok:\$${study_field_jobs[$base]} $(printf '%q' "$script")) || exit 1"
+        local after="--dependency=afterok:\$${study_field_jobs[$base]}"
+        study_submit_lines+=("$job=\$(sbatch --parsable $after $(printf '%q' "$script")) || exit 1"
                              "echo \"regridded field ${nx}^3: job \$$job\"")
         echo "wrote $script"
         return 0
