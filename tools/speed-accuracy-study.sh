@@ -15,10 +15,11 @@ same N seeds per shape (S..S+N-1), against the knob's reference setting. Run fro
 root after `make build tools-deps`.
 
   knob         variant      overrides (--set) on the base deck                            reference
-  grid         grid96       grid 96^3, dt 8.4e-6 s, 42 sub-steps, field hit_box_96       grid192
-               base         128^3, dt 4.8e-6 s, 24 sub-steps (the deck's)
-               grid192      grid 192^3, dt 2e-6 s, 10 sub-steps, field hit_box_192
-               grid256      grid 256^3, dt 1.2e-6 s, 6 sub-steps, field hit_box_256 (first N256 seeds)
+  grid         grid96       grid 96^3, dt 8.4e-6 s, 42 sub-steps, field hit_box_128_on_96  grid192
+               base         128^3, dt 4.8e-6 s, 24 sub-steps (the deck's), field hit_box_128
+               grid192      grid 192^3, dt 2e-6 s, 10 sub-steps, field hit_box_128_on_192
+               grid256      grid 256^3, dt 1.2e-6 s, 6 sub-steps, field hit_box_128_on_256
+                            (first N256 seeds)
   geometry     mesh80/320/1280  &bodies geometry = 'mesh', mesh_level = 1/2/3              base
   load_method  surface      &bodies load_method = 'surface' (mesh_level 2)                  base
   coupling     explicit     &scene ibm_coupling = 'explicit'                                 base
@@ -34,9 +35,12 @@ root after `make build tools-deps`.
   &run dt), a whole number of particle steps of 2e-7 s; 128^3 is the decks' 4.8e-6 s.
   Batches: OUT/<shape>-<variant>; the 'base' batch serves every knob that has it as reference.
 
-  0. the converged forced field of each grid (output/hit_box_<n>/final_field.h5; input/hit_box.nml
-     on that grid, computed first when missing: about 1 h at 128^3, 3-4 h at 192^3, 8-9 h at
-     256^3 on 2 cores (estimates), or on a cluster with --slurm)
+  0. the converged forced field of the base decks (output/hit_box_128/final_field.h5; input/hit_box.nml
+     at 128^3, computed first when missing: about 1 h on 2 cores, or on a cluster with --slurm),
+     and for each other grid the SAME field resampled onto it (output/hit_box_128_on_<n>/
+     final_field.h5, tools/regrid_field.py: spectral resampling at each component's staggered
+     positions, then the discrete projection; seconds, made when missing; with --slurm made at
+     once when the 128^3 field exists, else by a one-task job that waits for the field's job)
   1. the batches; field snapshots off (--set output.field_interval=0.0)
   2. OUT/manifest.tsv (knob, variant, shape, batch, reference) and tools/speed_accuracy.py:
      OUT/analysis/ (per knob variant against its reference on the shared seeds: outcome agreement,
@@ -96,11 +100,18 @@ variant() {
     study_batch "$shape-$name" "${deck//SHAPE/$shape}" "$count" "${sets[@]}"
   done
 }
+resolved=input/chaotic_SHAPE_resolved.nml
+# Every grid variant starts from the base decks' converged field (output/hit_box_128/final_field.h5)
+# resampled onto its grid, so that the variants differ in the grid alone, not in the realisation of
+# the turbulence (docs/speed-accuracy.md, "Why the grid variants share one field").
+read -r _ base_nx base_field <<< "$(study_deck_info "${resolved//SHAPE/${shape_list[0]}}")"
+[ -n "$base_field" ] || study_die "${resolved//SHAPE/${shape_list[0]}} starts from no &fluid init_file"
+regridded_field() { printf '%s_on_%s/final_field.h5' "$(dirname "$base_field")" "$1"; }
 grid_sets() {  # n dt substeps -> --set values of a grid variant
   printf '%s\n' --set "grid.nx=$1" --set "grid.ny=$1" --set "grid.nz=$1" --set "run.dt=$2" \
-    --set "scene.particle_substeps=$3" --set "fluid.init_file='output/hit_box_$1/final_field.h5'"
+    --set "scene.particle_substeps=$3" --set "fluid.init_file='$(regridded_field "$1")'"
 }
-resolved=input/chaotic_SHAPE_resolved.nml
+for n in 96 192 256; do study_field_from "$(regridded_field "$n")" "$base_field" "$base_nx"; done
 chaotic_protocol=(--set pair.gap=2.0e-6 --set pair.relative_speed=4.2e-3 --set "pair.approach='random'"
                   --set pair.mirror_first_collision=.false. --set run.end_time=3.0e-3 --set "pair.end_rule='paper'")
 for knob in "${knob_list[@]}"; do

@@ -17,6 +17,7 @@ from agglo_stats import contact_episodes, lever_arm
 from conftest import AGGLO_STATS, REPO, run_tool
 from fake_pair_scene import write_run
 from speed_accuracy import pareto_front
+from synthetic_fields import solenoidal_random_field, write_final_field
 
 PYTHON = REPO / ".venv" / "bin" / "python"
 
@@ -272,19 +273,83 @@ def test_study_slurm_scripts_and_forced_field_dependency(spaced_tmp):
     assert result.returncode == 0, result.stderr + result.stdout
     submit = (out / "submit-all.sh").read_text()
     assert run_tool(["bash", "-n", out / "submit-all.sh"]).returncode == 0
-    field = out / "slurm" / "forced_field_hit_box_96.sbatch"
+    # One converged field, the base decks' 128^3 one; no field is converged on another grid.
+    field = out / "slurm" / "forced_field_hit_box_128.sbatch"
     text = field.read_text()
-    assert "#SBATCH --partition=short" in text and "grid.nx=96" in text
+    assert "#SBATCH --partition=short" in text and "grid.nx=128" in text
     assert run_tool(["bash", "-n", field]).returncode == 0
-    # The 96^3 batch waits for its field; the batch script is montecarlo.sh's.
-    assert "field_96=$(sbatch --parsable" in submit
-    assert "--dependency=afterok:$field_96" in submit and "disk-grid96/montecarlo.sbatch" in submit
+    assert sorted(path.name for path in (out / "slurm").glob("forced_field_*")) == ["forced_field_hit_box_128.sbatch"]
+    # The 96^3 and 192^3 fields are that field resampled, by a one-task job after the field's job.
+    regrid = out / "slurm" / "regrid_field_hit_box_128_on_96.sbatch"
+    text = regrid.read_text()
+    assert "#SBATCH --ntasks=1" in text and "#SBATCH --partition=short" in text
+    assert "regrid_field.py output/hit_box_128/final_field.h5 --grid 96 -o output/hit_box_128_on_96/final_field.h5" in text
+    assert run_tool(["bash", "-n", regrid]).returncode == 0
+    assert "field_128=$(sbatch --parsable" in submit
+    assert "field_128_on_96=$(sbatch --parsable --dependency=afterok:$field_128 " in submit
+    assert "field_128_on_192=$(sbatch --parsable --dependency=afterok:$field_128 " in submit
+    # Each grid batch waits for its own field; the batch script is montecarlo.sh's.
+    assert "--dependency=afterok:$field_128_on_96" in submit and "disk-grid96/montecarlo.sbatch" in submit
+    assert submit.index("field_128=") < submit.index("field_128_on_96=") < submit.index("disk-grid96/montecarlo")
+    base_line = next(line for line in submit.splitlines() if "disk-base/montecarlo.sbatch" in line)
+    assert "--dependency=afterok:$field_128 " in base_line
     batch = (out / "disk-grid96" / "montecarlo.sbatch").read_text()
     assert "#SBATCH --array=1-2" in batch and "#SBATCH --ntasks=2" in batch
     assert "#SBATCH --partition=short" in batch
+    assert "output/hit_box_128_on_96/final_field.h5" in (out / "disk-grid96" / "batch.nml").read_text()
     manifest = read_csv(out / "manifest.tsv", "\t")
     assert [(row["variant"], row["reference"]) for row in manifest] == [
         ("grid96", "grid192"), ("base", "grid192"), ("grid192", "grid192")]
+
+
+def test_study_regrids_an_existing_base_field_at_once(spaced_tmp):
+    """With the base decks' field present, the grid variants' fields are made when the script
+    runs (tools/regrid_field.py, seconds), also under --slurm: the batch then waits for nothing.
+    A tiny synthetic base field (8^3, same box) stands in for the converged 128^3 one."""
+    work, out = spaced_tmp / "work", spaced_tmp / "sa"
+    (work / "output" / "hit_box_128").mkdir(parents=True)
+    (work / "input").symlink_to(REPO / "input")
+    field = solenoidal_random_field((8, 8, 8), box=(1.0e-3, 1.0e-3, 1.0e-3))
+    write_final_field(work / "output" / "hit_box_128" / "final_field.h5", field)
+    command = [REPO / "tools" / "speed-accuracy-study.sh", "-o", out, "-N", "2", "--shapes", "disk",
+               "--knobs", "grid", "--runs-256", "0"]
+    listed = run_tool(command + ["--list"], cwd=work)
+    assert listed.returncode == 0, listed.stderr
+    assert ("regridded field output/hit_box_128_on_96/final_field.h5: MISSING (tools/regrid_field.py: "
+            "output/hit_box_128/final_field.h5 resampled onto 96^3, made first)") in listed.stdout
+    assert "forced field output/hit_box_128/final_field.h5: present" in listed.stdout
+    result = run_tool(command + ["--slurm", "--only", "^disk-grid96$"], cwd=work)
+    assert result.returncode == 0, result.stderr + result.stdout
+    regridded = work / "output" / "hit_box_128_on_96" / "final_field.h5"
+    with h5py.File(regridded, "r") as handle:
+        assert list(handle["fluid/grid_shape"][()]) == [96, 96, 96]
+        assert list(handle["forcing/state"][()]) == list(field["forcing_state"])
+    submit = (out / "submit-all.sh").read_text()
+    assert "dependency" not in submit and "disk-grid96/montecarlo.sbatch" in submit
+    assert not list((out / "slurm").glob("*.sbatch"))
+    times = read_csv(out / "batch_times.tsv", "\t")
+    assert [(row["batch"], row["status"]) for row in times] == [("regrid_field_hit_box_128_on_96", "0")]
+    # Made once: a second call finds it (and never overwrites it).
+    before = regridded.stat().st_mtime_ns
+    listed = run_tool(command + ["--list"], cwd=work)
+    assert "regridded field output/hit_box_128_on_96/final_field.h5: present" in listed.stdout
+    assert regridded.stat().st_mtime_ns == before
+
+
+def test_study_without_a_usable_base_field_schedules_no_grid_batch(spaced_tmp):
+    """A base field that tools/regrid_field.py cannot read: the study says so, exits 1, and writes
+    no Slurm script for the batches that would start from the missing resampled field."""
+    work, out = spaced_tmp / "work", spaced_tmp / "sa"
+    (work / "output" / "hit_box_128").mkdir(parents=True)
+    (work / "input").symlink_to(REPO / "input")
+    (work / "output" / "hit_box_128" / "final_field.h5").write_text("not a field\n")
+    result = run_tool([REPO / "tools" / "speed-accuracy-study.sh", "-o", out, "-N", "2", "--shapes", "disk",
+                       "--knobs", "grid", "--runs-256", "0", "--slurm", "--only", "grid96"], cwd=work)
+    assert result.returncode == 1, result.stderr + result.stdout
+    assert "regridded field output/hit_box_128_on_96/final_field.h5 failed" in result.stderr
+    assert "not an HDF5 file" in (out / "regrid_field_hit_box_128_on_96.log").read_text()
+    assert not (out / "disk-grid96" / "montecarlo.sbatch").exists()
+    assert not (work / "output" / "hit_box_128_on_96").exists()
 
 
 def test_study_runs_resumes_and_records_costs(spaced_tmp, agglo, monkeypatch):
