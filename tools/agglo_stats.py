@@ -77,7 +77,11 @@ class Run:
         contact_episodes), carried_distance (m, path of the pair's midpoint, the integral of
         |v1 + v2| / 2 dt), close_fraction (share of the run time after the first collision with
         the gap below CLOSE_GAP_RADII radii; 0 without contact), relative_path (m, the integral
-        of |v2 - v1| dt: how far the particles moved relative to each other), radius (m)."""
+        of |v2 - v1| dt: how far the particles moved relative to each other), min_gap (m, the
+        smallest sampled gap), early_approach_ratio (the normal relative velocity of the closest
+        points at the second sampled row over the first, when both precede any collision and the
+        pair approaches at the first: how much of the start's approach the first sample interval
+        keeps), radius (m)."""
         if self._metrics is None:
             self._metrics = history_metrics(self)
         return self._metrics
@@ -103,7 +107,8 @@ def is_fluid_run(directory):
 
 
 HISTORY_METRICS = ("max_particle_speed", "chi_eta_first_collision", "lever_arm_first_collision",
-                   "contact_episodes", "carried_distance", "relative_path", "close_fraction", "radius")
+                   "contact_episodes", "carried_distance", "relative_path", "close_fraction", "min_gap",
+                   "early_approach_ratio", "radius")
 # Between two collisions of one contact episode the gap stays below this many detection floors; a
 # pair whose gap rises above it between two collisions has separated and come back (a new episode).
 EPISODE_FLOORS = 10.0
@@ -160,6 +165,8 @@ def history_metrics(run):
         v1 = np.asarray(h5["particle1/velocity"][:], float)
         v2 = np.asarray(h5["particle2/velocity"][:], float)
         chi = np.asarray(h5["pair/chi_eta"][:], float) if "pair/chi_eta" in h5 else None
+        approach = (np.asarray(h5["pair/relative_velocity"][:], float) if "pair/relative_velocity" in h5
+                    else None)
         points = ([np.asarray(h5[f"pair/closest_point{k}"][:], float) for k in (1, 2)]
                   if "pair/closest_point1" in h5 and "pair/closest_point2" in h5 else None)
         centres = [np.asarray(h5[f"particle{k}/position"][:], float) for k in (1, 2)]
@@ -182,6 +189,10 @@ def history_metrics(run):
         return float(np.sum(0.5 * (speed[1:] + speed[:-1]) * np.diff(time)))
     values["carried_distance"] = path(np.linalg.norm(0.5 * (v1 + v2), axis=1))
     values["relative_path"] = path(np.linalg.norm(v2 - v1, axis=1))
+    values["min_gap"] = float(np.min(gap))
+    if approach is not None and approach.size > 1 and approach[0] > 0.0 and \
+            (events.size == 0 or events.min() > time[1]):
+        values["early_approach_ratio"] = float(approach[1] / approach[0])
     values["close_fraction"] = 0.0
     if first is not None and radius is not None and time[-1] > first["time"]:
         after = time >= first["time"]
@@ -306,7 +317,8 @@ RUN_COLUMNS = ("batch", "run", "group", "name", "seed", "shape", "aspect_ratio",
                "normal_velocity_before", "normal_velocity_after", "max_vdw_force", "final_gap",
                "final_relative_velocity", "psi_final", "end_time", "steps", "wall_time",
                "max_particle_speed", "chi_eta_first_collision", "lever_arm_first_collision",
-               "contact_episodes", "carried_distance", "relative_path", "close_fraction")
+               "contact_episodes", "carried_distance", "relative_path", "close_fraction", "min_gap",
+               "early_approach_ratio")
 
 
 def run_row(run):

@@ -21,7 +21,8 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from agglo_stats import BatchError, load_runs  # noqa: E402
 
 PER_RUN = ("outcome", "collisions", "contact_episodes", "normal_velocity_before", "chi_eta",
-           "psi", "lever_arm", "max_particle_speed", "final_gap", "wall_time", "end_time")
+           "psi", "lever_arm", "max_particle_speed", "min_gap", "early_approach_ratio", "final_gap",
+           "wall_time", "end_time")
 COLUMNS = ("run", "seed", "changed") + tuple(f"{side}_{key}" for key in PER_RUN
                                               for side in ("reference", "variant"))
 
@@ -37,6 +38,7 @@ def run_values(run):
             "chi_eta": metrics["chi_eta_first_collision"], "psi": first.get("psi"),
             "lever_arm": metrics["lever_arm_first_collision"],
             "max_particle_speed": metrics["max_particle_speed"],
+            "min_gap": metrics["min_gap"], "early_approach_ratio": metrics["early_approach_ratio"],
             "final_gap": run.summary["final_gap"], "wall_time": run.summary["wall_time"],
             "end_time": run.summary["end_time"]}
 

@@ -95,6 +95,10 @@ def make_illustration_batch(root):
         del h5["events/time"]
         h5["events/time"] = np.array([contact, contact + 0.5 * (time[-1] - contact)])
     edit_summary(directories[6], phi1=0.5 * math.pi + 0.05)
+    with h5py.File(os.path.join(directories[2], "particles.h5"), "r+") as h5:
+        approach = h5["pair/relative_velocity"][:]
+        approach[1] = 0.5 * approach[0]
+        h5["pair/relative_velocity"][...] = approach
     with h5py.File(os.path.join(directories[7], "particles.h5"), "r+") as h5:
         for k in (1, 2):
             velocity = h5[f"particle{k}/velocity"][:]
@@ -123,6 +127,13 @@ def test_history_metrics_means_and_illustrative_runs(spaced_tmp):
     assert float(runs["run_0007"]["carried_distance"]) == pytest.approx(1.0e-4, rel=1e-6)
     # Relative path: 5 um of approach, then the rebound at 0.4 mm/s for the remaining 5 ms.
     assert float(runs["run_0007"]["relative_path"]) == pytest.approx(5.0e-6 + 0.4e-3 * 5.0e-3, rel=0.02)
+    # The smallest sampled gap and the approach the first sample interval keeps (fixture: a
+    # constant 1 mm/s approach; run_0002 made to halve it at its second row).
+    for name, row in runs.items():
+        with h5py.File(root / name / "particles.h5", "r") as h5:
+            assert float(row["min_gap"]) == pytest.approx(h5["pair/gap"][:].min(), rel=1e-12)
+    assert float(runs["run_0001"]["early_approach_ratio"]) == pytest.approx(1.0, rel=1e-12)
+    assert float(runs["run_0002"]["early_approach_ratio"]) == pytest.approx(0.5, rel=1e-12)
     # Means over every history row of the group.
     means = read_csv(out / "history_means.csv")[0]
     gaps = []
