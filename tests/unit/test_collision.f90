@@ -15,6 +15,7 @@ program test_collision
   use rigid_body, only: rigid_body_t, rigid_body_init, rigid_body_step, kinetic_energy, linear_momentum, &
                         angular_momentum, integrator_euler, integrator_verlet, added_inertia_t
   use quaternion, only: rotate_to_lab, rotate_to_body, quaternion_normalise
+  use vector_algebra, only: cross
   use random_stream, only: random_stream_t, stream_seed, stream_uniform, stream_normal
   use test_framework, only: test_start, test_finish, check, check_close, check_below, check_equal
   implicit none
@@ -234,15 +235,9 @@ contains
     type(rigid_body_t), intent(in) :: body
     type(added_inertia_t), intent(in) :: added
     real(wp) :: l(3)
-    l = cross3(body%position, momentum(body, added)) &
+    l = cross(body%position, momentum(body, added)) &
         + rotate_to_lab(body%quaternion, (body%inertia_body + added%inertia) * body%angular_velocity_body)
   end function moment_of_momentum
-
-  pure function cross3(a, b) result(c)
-    real(wp), intent(in) :: a(3), b(3)
-    real(wp) :: c(3)
-    c = [a(2) * b(3) - a(3) * b(2), a(3) * b(1) - a(1) * b(3), a(1) * b(2) - a(2) * b(1)]
-  end function cross3
 
   pure function semi_axes(aspect_ratio) result(axes)
     real(wp), intent(in) :: aspect_ratio
