@@ -243,17 +243,15 @@ contains
     r1 = xc - body1%position
     r2 = xc - body2%position
     v = point_velocity(body1, xc) - point_velocity(body2, xc)
+    ! An absent added1, added2 passes on as absent: the bodies alone.
+    inv1 = inverse_inertia_lab(body1, added1)
+    inv2 = inverse_inertia_lab(body2, added2)
     if (in_fluid) then
-      inv1 = inverse_inertia_lab(body1, added1)
-      inv2 = inverse_inertia_lab(body2, added2)
       k = contact_matrix(inverse_mass_lab(body1, added1) + inverse_mass_lab(body2, added2), inv1, r1, inv2, r2)
-      energy_before = kinetic_energy(body1, added1) + kinetic_energy(body2, added2)
     else
-      inv1 = inverse_inertia_lab(body1)
-      inv2 = inverse_inertia_lab(body2)
       k = contact_matrix(isotropic_inverse_mass(1.0_wp / body1%mass + 1.0_wp / body2%mass), inv1, r1, inv2, r2)
-      energy_before = kinetic_energy(body1) + kinetic_energy(body2)
     end if
+    energy_before = kinetic_energy(body1, added1) + kinetic_energy(body2, added2)
     result%contact_point = xc
     result%normal = n
     result%normal_velocity_before = dot_product(v, n)
@@ -270,11 +268,7 @@ contains
       end if
     end if
     result%normal_velocity_after = dot_product(point_velocity(body1, xc) - point_velocity(body2, xc), n)
-    if (in_fluid) then
-      result%energy_change = kinetic_energy(body1, added1) + kinetic_energy(body2, added2) - energy_before
-    else
-      result%energy_change = kinetic_energy(body1) + kinetic_energy(body2) - energy_before
-    end if
+    result%energy_change = kinetic_energy(body1, added1) + kinetic_energy(body2, added2) - energy_before
   end subroutine collide_points
 
   !> Inverse of a 3x3 matrix by cofactors (K is symmetric positive definite: m > 0, I > 0).

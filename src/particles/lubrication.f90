@@ -177,7 +177,7 @@ contains
     real(wp), intent(in) :: dt
     type(lubrication_result_t), intent(out) :: result
     type(added_inertia_t), intent(in), optional :: added1, added2   !< both or neither (module collision)
-    real(wp) :: n(3), r1(3), r2(3), k(3, 3), normal_speed, j
+    real(wp) :: n(3), r1(3), r2(3), k(3, 3), inverse_mass(3, 3), normal_speed, j
     if (contact%gap >= model%outer_gap) return
     result%active = .true.
     result%geometry = lubrication_geometry(shape1, body1, shape2, body2, contact)
@@ -187,23 +187,18 @@ contains
     r1 = result%point - body1%position
     r2 = result%point - body2%position
     normal_speed = dot_product(point_velocity(body1, result%point) - point_velocity(body2, result%point), n)
+    ! An absent added1, added2 passes on as absent: the bodies alone.
     if (present(added1) .and. present(added2)) then
-      k = contact_matrix(inverse_mass_lab(body1, added1) + inverse_mass_lab(body2, added2), &
-                         inverse_inertia_lab(body1, added1), r1, inverse_inertia_lab(body2, added2), r2)
+      inverse_mass = inverse_mass_lab(body1, added1) + inverse_mass_lab(body2, added2)
     else
-      k = contact_matrix(isotropic_inverse_mass(1.0_wp / body1%mass + 1.0_wp / body2%mass), inverse_inertia_lab(body1), &
-                         r1, inverse_inertia_lab(body2), r2)
+      inverse_mass = isotropic_inverse_mass(1.0_wp / body1%mass + 1.0_wp / body2%mass)
     end if
+    k = contact_matrix(inverse_mass, inverse_inertia_lab(body1, added1), r1, inverse_inertia_lab(body2, added2), r2)
     j = result%resistance * dt * normal_speed / (1.0_wp + result%resistance * dt * dot_product(n, matmul(k, n)))
     result%force = j / dt * n
     result%torque1 = cross(r1, -result%force)
     result%torque2 = cross(r2, result%force)
-    if (present(added1) .and. present(added2)) then
-      call rigid_body_kick(body1, -result%force, result%torque1, dt, added1)
-      call rigid_body_kick(body2, result%force, result%torque2, dt, added2)
-    else
-      call rigid_body_kick(body1, -result%force, result%torque1, dt)
-      call rigid_body_kick(body2, result%force, result%torque2, dt)
-    end if
+    call rigid_body_kick(body1, -result%force, result%torque1, dt, added1)
+    call rigid_body_kick(body2, result%force, result%torque2, dt, added2)
   end subroutine lubricate
 end module lubrication
