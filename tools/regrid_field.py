@@ -32,9 +32,15 @@ divergence relative to max|u|/dx before and after the projection.
 
 Usage: .venv/bin/python tools/regrid_field.py INPUT.h5 --grid N [or NX NY NZ] -o OUTPUT.h5
            [--box L or LX LY LZ] [--projection continuous|discrete] [--force]
-Exit status: 0 written, 2 refused (the argument and the reason named on stderr).
+       .venv/bin/python tools/regrid_field.py INPUT.h5 --fingerprint
+--fingerprint prints the SHA-256 of the field's content (grid, box, time, u, v, w, pressure and the
+forcing state as stored, not the file's bytes, which carry HDF5 metadata): two files with the same
+fingerprint start a deck on the same flow to the bit, so the results of runs started from them on
+other machines or in other sessions may be compared run by run.
+Exit status: 0 written (or printed), 2 refused (the argument and the reason named on stderr).
 """
 import argparse
+import hashlib
 import os
 import sys
 
@@ -121,6 +127,22 @@ def write_field(path, field, source_shape):
         handle.attrs["regridded_from_grid_shape"] = np.asarray(source_shape, dtype=np.int32)
         handle.attrs["regridded_by"] = "tools/regrid_field.py"
     os.replace(temporary, path)
+
+
+def field_fingerprint(field):
+    """SHA-256 (hex) of a read_field dict's content: shape, box, time, the velocity and pressure
+    samples and the forcing state, each as little-endian bytes in the code's [i, j, k] order."""
+    digest = hashlib.sha256()
+    digest.update(np.asarray(field["shape"], dtype="<i8").tobytes())
+    digest.update(np.asarray(field["box"] + (field["time"],), dtype="<f8").tobytes())
+    for name in ("u", "v", "w", "pressure"):
+        if name in field:
+            digest.update(name.encode())
+            digest.update(np.ascontiguousarray(field[name], dtype="<f8").tobytes())
+    if field["forcing_state"] is not None:
+        digest.update(b"forcing")
+        digest.update(np.ascontiguousarray(field["forcing_state"], dtype="<i8").tobytes())
+    return digest.hexdigest()
 
 
 # ------------------------------------------------------------------------------------------------
@@ -295,14 +317,25 @@ def main(argv=None):
                                      formatter_class=argparse.RawDescriptionHelpFormatter,
                                      epilog="Method and output: see the module docstring (tools/regrid_field.py).")
     parser.add_argument("input", help="final_field.h5, a checkpoint or a field snapshot written by Agglo")
-    parser.add_argument("--grid", nargs="+", required=True, metavar="N", help="N (N^3) or NX NY NZ cells")
-    parser.add_argument("-o", "--output", required=True, help="the regridded field (final-field layout)")
+    parser.add_argument("--grid", nargs="+", metavar="N", help="N (N^3) or NX NY NZ cells")
+    parser.add_argument("-o", "--output", help="the regridded field (final-field layout)")
     parser.add_argument("--box", nargs="+", metavar="L", help="the box (m) the caller expects: refused if the "
                                                               "input's differs")
     parser.add_argument("--projection", choices=("continuous", "discrete"), default="continuous",
                         help="remove k (default: exact round trips) or the discrete gradient (orthogonal)")
     parser.add_argument("--force", action="store_true", help="replace an existing OUTPUT")
+    parser.add_argument("--fingerprint", action="store_true", help="print the SHA-256 of INPUT's field content "
+                                                                   "and write nothing")
     args = parser.parse_args(argv)
+    if args.fingerprint:
+        try:
+            print(f"{field_fingerprint(read_field(args.input))}  {args.input}")
+        except Refusal as refusal:
+            print(f"regrid_field: {refusal}", file=sys.stderr)
+            return 2
+        return 0
+    if args.grid is None or args.output is None:
+        parser.error("--grid and -o are required (or --fingerprint)")
     try:
         new_shape = _grid(args.grid)
         if os.path.exists(args.output) and os.path.exists(args.input) and os.path.samefile(args.output, args.input):

@@ -55,9 +55,23 @@ Options of this study:
       --knobs "K ..."    knobs (default "noise grid geometry load_method coupling diffusion substep
                          fidelity")
 
+Run tables (the study spans sessions and machines): the few numbers per complete run that the
+analysis reads (tools/study_compare.py --table) are committed in TABLES (default
+docs/figures/speed-accuracy/runs, one <batch>.csv each with its base deck <batch>.nml, and FIELD:
+the fingerprint of the base field they were computed from, tools/regrid_field.py --fingerprint). A
+batch whose table there has its N runs from the base seed S, and whose base deck is the one this
+call would run, is not run again; the analysis reads it where the batch root is absent. The
+tables are used only when this machine's base field has the same fingerprint (the same flow to the
+bit); otherwise the script stops, and --no-tables computes every batch afresh.
+      --tables DIR       the run tables' folder (default docs/figures/speed-accuracy/runs)
+      --no-tables        neither read nor skip by run tables
+With --publish the analysis' run tables of the batches run here are copied into TABLES as well.
+
 The base batches and the point batches are the chaotic study's on its first N seeds
 (tools/chaotic-study.sh: the same decks, --set values and seeds): by default their complete runs
-are reused from output/chaotic-study (--reuse-from; --no-reuse computes them again).
+are reused from output/chaotic-study (--reuse-from; --no-reuse computes them again). Reuse
+compares deck text and seeds, not the field file's content: it is right only when the chaotic
+study ran from the same base field as this study.
 EOF
 }
 
@@ -65,6 +79,7 @@ source "$(dirname "${BASH_SOURCE[0]}")/study_lib.sh"
 study_parse_arguments "$@"
 runs=20 runs_256=5 shapes="needle disk sphere"
 knobs="noise grid geometry load_method coupling diffusion substep fidelity"
+tables=docs/figures/speed-accuracy/runs
 set -- "${study_extra_arguments[@]}"
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -72,6 +87,8 @@ while [ $# -gt 0 ]; do
     --runs-256) runs_256=${2:?}; shift 2 ;;
     --shapes) shapes=${2:?}; shift 2 ;;
     --knobs) knobs=${2:?}; shift 2 ;;
+    --tables) tables=${2:?}; shift 2 ;;
+    --no-tables) tables=''; shift ;;
     *) study_die "unknown argument '$1' (see --help)" ;;
   esac
 done
@@ -88,6 +105,19 @@ done
 quiet=(--set output.field_interval=0.0)
 manifest_rows=()
 declare -A declared=()
+# table_matches BATCH DECK [--set ...]: whether the committed run table of BATCH holds runs of this
+# batch: runs from the study's base seed whose base deck (TABLES/BATCH.nml, montecarlo.sh's batch.nml
+# of those runs) is DECK with these --set values as the code merges them. A matching table is linked
+# into OUT/committed-tables/, where the analysis reads the batches that have no root here.
+table_matches() {
+  local name=$1 table="$tables/$1.csv" text; shift
+  [ -n "$tables" ] && [ -f "$table" ] && [ -f "$tables/$name.nml" ] || return 1
+  [ "$(awk -F, 'NR == 2 { print $2 }' "$table")" = "$study_seed" ] || return 1
+  text=$("${AGGLO:-$study_repo/build/agglo}" "$@" --print-deck 2> /dev/null < /dev/null) || return 1
+  printf '%s\n' "$text" | cmp -s - "$tables/$name.nml" || return 1
+  [ "$study_mode" = list ] && return 0
+  mkdir -p "$study_out/committed-tables" && ln -sfn "$(cd "$tables" && pwd -P)/$name.csv" "$study_out/committed-tables/$name.csv"
+}
 # variant KNOB VARIANT REFERENCE DECK RUNS [--set ...]: one batch per shape (SHAPE in DECK and the
 # --set values is replaced by the shape), run once even when several knobs list it.
 variant() {
@@ -97,6 +127,13 @@ variant() {
     [ -n "${declared[$shape-$name]+x}" ] && continue
     declared[$shape-$name]=1
     local -a sets=("${@//SHAPE/$shape}")
+    # A matching table with COUNT runs stands for a batch that has no root here: not run again.
+    if table_matches "$shape-$name" "${deck//SHAPE/$shape}" "${sets[@]}" && study_selected "$shape-$name" \
+       && [ ! -d "$study_out/$shape-$name" ] && (( $(wc -l < "$tables/$shape-$name.csv") - 1 >= count )); then
+      [ "$study_mode" = list ] && study_batch "$shape-$name" "${deck//SHAPE/$shape}" "$count" "${sets[@]}"
+      echo "batch $shape-$name: from its run table $tables/$shape-$name.csv ($count runs), not run"
+      continue
+    fi
     study_batch "$shape-$name" "${deck//SHAPE/$shape}" "$count" "${sets[@]}"
   done
 }
@@ -112,6 +149,22 @@ grid_sets() {  # n dt substeps -> --set values of a grid variant
     --set "scene.particle_substeps=$3" --set "fluid.init_file='$(regridded_field "$1")'"
 }
 for n in 96 192 256; do study_field_from "$(regridded_field "$n")" "$base_field" "$base_nx"; done
+# The committed run tables were computed from one base field: they stand for batches here only when
+# this machine's base field is that field to the bit (its fingerprint in $tables/FIELD).
+if [ -n "$tables" ] && [ -f "$tables/FIELD" ] && [ "$study_mode" != list ]; then
+  if [ -f "$base_field" ]; then
+    read -r committed _ < "$tables/FIELD"
+    read -r here _ < <("$study_python" "$study_tools/regrid_field.py" "$base_field" --fingerprint) || \
+      study_die "cannot fingerprint $base_field"
+    [ "$committed" = "$here" ] || study_die "the run tables in $tables were computed from a base field with \
+fingerprint $committed, but $base_field has $here (made on another machine or build?): their runs cannot be \
+paired with runs started from this field. Use --no-tables (and another --out) to compute every batch here."
+  elif [ "$study_mode" = run ]; then
+    study_die "$base_field is missing: make it first (the command in the header of ${resolved//SHAPE/${shape_list[0]}}), \
+then run again: its fingerprint is checked against $tables/FIELD before any batch"
+  fi
+fi
+[ "$study_mode" = list ] || rm -rf "$study_out/committed-tables"   # links of the last call, made anew
 chaotic_protocol=(--set pair.gap=2.0e-6 --set pair.relative_speed=4.2e-3 --set "pair.approach='random'"
                   --set pair.mirror_first_collision=.false. --set run.end_time=3.0e-3 --set "pair.end_rule='paper'")
 for knob in "${knob_list[@]}"; do
@@ -165,7 +218,18 @@ if [ "$study_mode" != list ]; then
 fi
 if [ "$study_mode" = run ] && (( study_analysis )); then
   echo "== speed-accuracy analysis -> $study_out/analysis"
-  "$study_python" "$study_tools/speed_accuracy.py" "$study_out/manifest.tsv" -o "$study_out/analysis" \
-    | tee "$study_out/analysis.txt" || study_status_all=1
+  analysis=("$study_python" "$study_tools/speed_accuracy.py" "$study_out/manifest.tsv" -o "$study_out/analysis"
+            --save-tables "$study_out/tables")
+  [ -d "$study_out/committed-tables" ] && analysis+=(--tables "$study_out/committed-tables")
+  "${analysis[@]}" | tee "$study_out/analysis.txt" || study_status_all=1
+  if (( study_publish )) && [ -n "$tables" ] && compgen -G "$study_out/tables/*.csv" > /dev/null; then
+    mkdir -p "$tables" || exit 1
+    for table in "$study_out"/tables/*.csv; do
+      batch=$(basename "$table" .csv)
+      cp "$table" "$tables/" && cp "$study_out/$batch/batch.nml" "$tables/$batch.nml" || study_status_all=1
+    done
+    "$study_python" "$study_tools/regrid_field.py" "$base_field" --fingerprint > "$tables/FIELD" && \
+      echo "published the run tables and their base decks into $tables" || study_status_all=1
+  fi
 fi
 study_finish

@@ -15,11 +15,14 @@ reference batch of the same shape on the seeds complete in both (tools/study_com
   cost_per_ms_s       median wall seconds per simulated millisecond of the variant
   cost_ratio          cost_per_ms_s of the variant over that of its reference (< 1: cheaper)
 
-The reference's own cost is given as well (the reference row, errors 0 by definition). Writes
+The reference's own cost is given as well (the reference row, errors 0 by definition). A batch
+whose root is absent is read from its run table TABLES/<batch>.csv when --tables names a folder
+that has one (study_compare.py: the committed numbers per run of a study spanning sessions);
+--save-tables DIR writes DIR/<batch>.csv for every batch root present. Writes
 OUT/comparison.csv, OUT/speed_accuracy.md (a markdown table per knob) and OUT/pareto_<metric>.png
 (error against cost per simulated ms, one panel per shape, each knob's variants labelled and the
 non-dominated points joined). Usage:
-    .venv/bin/python tools/speed_accuracy.py MANIFEST.tsv [-o OUT]
+    .venv/bin/python tools/speed_accuracy.py MANIFEST.tsv [-o OUT] [--tables DIR] [--save-tables DIR]
 Exit status: 0 done (rows without complete runs are reported, not fatal), 1 unusable manifest.
 """
 import argparse
@@ -30,8 +33,8 @@ import statistics
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from agglo_stats import BatchError, load_runs, wilson_interval  # noqa: E402
-from study_compare import paired_runs  # noqa: E402
+from agglo_stats import BatchError, wilson_interval  # noqa: E402
+from study_compare import batch_runs, paired_runs, write_csv, write_run_table  # noqa: E402
 
 MANIFEST_COLUMNS = ("knob", "variant", "shape", "batch", "reference")
 METRICS = (("outcome_disagreement", "1 - outcome agreement"),
@@ -47,8 +50,9 @@ class ManifestError(Exception):
     """A manifest that cannot be read."""
 
 
-def read_manifest(path):
-    """Rows of the manifest, batch paths made absolute from the manifest's directory."""
+def read_manifest(path, tables=None):
+    """Rows of the manifest, batch paths made absolute from the manifest's directory; a batch
+    whose root is absent is its run table in the folder tables, when that has one."""
     try:
         with open(path, newline="") as handle:
             rows = list(csv.DictReader(handle, delimiter="\t"))
@@ -62,6 +66,9 @@ def read_manifest(path):
     base = os.path.dirname(os.path.abspath(path))
     for row in rows:
         row["batch"] = os.path.join(base, row["batch"])
+        table = os.path.join(tables, os.path.basename(os.path.normpath(row["batch"])) + ".csv") if tables else None
+        if table and not os.path.isdir(row["batch"]) and os.path.isfile(table):
+            row["batch"] = table
     return rows
 
 
@@ -73,15 +80,15 @@ def relative_error(pairs, key):
     return (statistics.median(errors), len(errors)) if errors else (None, 0)
 
 
-def batch_cost(root):
+def batch_cost(batch):
     """(median wall time of a run, median wall seconds per simulated ms) of a batch's complete
-    runs; (None, None) without any."""
+    runs (root or run table); (None, None) without any."""
     try:
-        runs = load_runs([root])[0]
+        runs = [values for _seed, values in batch_runs(batch).values()]
     except BatchError:
         return None, None
-    walls = [r.summary["wall_time"] for r in runs]
-    per_ms = [r.summary["wall_time"] / (r.summary["end_time"] * 1e3) for r in runs if r.summary["end_time"] > 0]
+    walls = [r["wall_time"] for r in runs]
+    per_ms = [r["wall_time"] / (r["end_time"] * 1e3) for r in runs if r["end_time"] > 0]
     return (statistics.median(walls) if walls else None, statistics.median(per_ms) if per_ms else None)
 
 
@@ -89,7 +96,7 @@ def compare_row(row, reference_batch):
     """One COLUMNS row of a manifest row against its reference batch."""
     out = dict.fromkeys(COLUMNS, "")
     out.update(knob=row["knob"], variant=row["variant"], shape=row["shape"], reference=row["reference"])
-    if not os.path.isdir(row["batch"]):
+    if not os.path.exists(row["batch"]):
         out["status"] = "not run"
         return out
     cost_run, cost_ms = batch_cost(row["batch"])
@@ -98,7 +105,7 @@ def compare_row(row, reference_batch):
     if row["variant"] == row["reference"]:
         out.update(status="reference", outcome_agreement=1.0, vn_error=0.0, chi_error=0.0, vmax_error=0.0)
         return out
-    if reference_batch is None or not os.path.isdir(reference_batch):
+    if reference_batch is None or not os.path.exists(reference_batch):
         out["status"] = "reference not run"
         return out
     try:
@@ -220,20 +227,26 @@ def main(argv=None):
     parser.add_argument("manifest", help="manifest.tsv of tools/speed-accuracy-study.sh")
     parser.add_argument("-o", "--out", help="output directory (default: analysis/ next to the manifest)")
     parser.add_argument("--no-figures", action="store_true", help="only comparison.csv and the table")
+    parser.add_argument("--tables", metavar="DIR", help="run tables <batch>.csv of the batches whose root is absent")
+    parser.add_argument("--save-tables", metavar="DIR", help="write DIR/<batch>.csv for every batch root present")
     arguments = parser.parse_args(argv)
     try:
-        manifest = read_manifest(arguments.manifest)
+        manifest = read_manifest(arguments.manifest, arguments.tables)
     except ManifestError as error:
         print(f"speed_accuracy: {error}", file=sys.stderr)
         return 1
+    if arguments.save_tables:
+        os.makedirs(arguments.save_tables, exist_ok=True)
+        for batch in dict.fromkeys(row["batch"] for row in manifest if os.path.isdir(row["batch"])):
+            path = os.path.join(arguments.save_tables, os.path.basename(os.path.normpath(batch)) + ".csv")
+            try:
+                print(f"run table {path}: {write_run_table(batch, path)} runs")
+            except BatchError as error:
+                print(f"speed_accuracy: no run table of '{batch}': {error}", file=sys.stderr)
     out = arguments.out or os.path.join(os.path.dirname(os.path.abspath(arguments.manifest)), "analysis")
     os.makedirs(out, exist_ok=True)
     rows = analyse(manifest)
-    with open(os.path.join(out, "comparison.csv.tmp"), "w", newline="") as handle:
-        writer = csv.DictWriter(handle, fieldnames=COLUMNS)
-        writer.writeheader()
-        writer.writerows(rows)
-    os.replace(os.path.join(out, "comparison.csv.tmp"), os.path.join(out, "comparison.csv"))
+    write_csv(os.path.join(out, "comparison.csv"), COLUMNS, rows)
     table = markdown(rows)
     with open(os.path.join(out, "speed_accuracy.md"), "w") as handle:
         handle.write(table + "\n")

@@ -9,8 +9,14 @@ first-collision normal velocity and chi_eta, psi, the number of contact episodes
 particle speed, the final gap, the wall time. compare_outcomes.py gives the transition counts;
 this tool gives the runs. speed_accuracy.py uses paired_runs for its error metrics.
 
-Usage: .venv/bin/python tools/study_compare.py REFERENCE_ROOT VARIANT_ROOT [-o FILE.csv]
-Prints the runs whose outcome changed. Exit status: 0 done, 1 unusable input.
+A batch is either a batch root of run directories or its run table: a CSV of one row per complete
+run (RUN_TABLE_COLUMNS, written by write_run_table or `--table`), the few numbers per run a study
+keeps once its raw runs are gone (the committed statistics of a study that spans sessions).
+
+Usage: .venv/bin/python tools/study_compare.py REFERENCE VARIANT [-o FILE.csv]
+       .venv/bin/python tools/study_compare.py --table BATCH_ROOT -o TABLE.csv
+REFERENCE and VARIANT are batch roots or run tables (*.csv). Prints the runs whose outcome
+changed. Exit status: 0 done, 1 unusable input.
 """
 import argparse
 import csv
@@ -25,6 +31,9 @@ PER_RUN = ("outcome", "collisions", "contact_episodes", "normal_velocity_before"
            "wall_time", "end_time")
 COLUMNS = ("run", "seed", "changed") + tuple(f"{side}_{key}" for key in PER_RUN
                                               for side in ("reference", "variant"))
+RUN_TABLE_COLUMNS = ("run", "seed") + PER_RUN
+_TEXT_VALUES = ("outcome",)
+_INTEGER_VALUES = ("collisions", "contact_episodes")
 
 
 def run_values(run):
@@ -43,30 +52,95 @@ def run_values(run):
             "end_time": run.summary["end_time"]}
 
 
-def paired_runs(reference_root, variant_root):
-    """[(run name, seed, reference values, variant values)] of the runs complete in both batches,
-    by run name. Raises BatchError when none is common or a pair's seeds differ."""
-    reference = {os.path.basename(r.directory): r for r in load_runs([reference_root])[0]}
-    variant = {os.path.basename(r.directory): r for r in load_runs([variant_root])[0]}
+def is_run_table(batch):
+    """Whether a batch is given as a run table (a .csv file) rather than a batch root."""
+    return batch.endswith(".csv") and not os.path.isdir(batch)
+
+
+def read_run_table(path):
+    """{run name: (seed, PER_RUN values)} of a run table; an empty cell is None. Raises BatchError
+    for a file that is not a run table."""
+    def value(key, text):
+        if text == "" or key in _TEXT_VALUES:
+            return text or None
+        return int(text) if key in _INTEGER_VALUES else float(text)
+    try:
+        with open(path, newline="") as handle:
+            reader = csv.DictReader(handle)
+            missing = [c for c in RUN_TABLE_COLUMNS if c not in (reader.fieldnames or ())]
+            if missing:
+                raise BatchError(f"run table '{path}' lacks the column(s) {', '.join(missing)}")
+            runs = {row["run"]: (int(row["seed"]), {key: value(key, row[key]) for key in PER_RUN})
+                    for row in reader}
+    except (OSError, ValueError) as error:
+        raise BatchError(f"run table '{path}' unreadable: {error}") from error
+    if not runs:
+        raise BatchError(f"run table '{path}' has no run")
+    return runs
+
+
+def batch_runs(batch):
+    """{run name: (seed, PER_RUN values)} of the complete runs of a batch root or a run table."""
+    if is_run_table(batch):
+        return read_run_table(batch)
+    return {os.path.basename(r.directory): (r.summary["seed"], run_values(r)) for r in load_runs([batch])[0]}
+
+
+def write_csv(path, columns, rows):
+    """rows (dicts) as a CSV file at path, written to path.tmp and renamed when complete."""
+    with open(path + ".tmp", "w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=columns, lineterminator="\n")
+        writer.writeheader()
+        writer.writerows(rows)
+    os.replace(path + ".tmp", path)
+
+
+def write_run_table(batch, path):
+    """Write the run table of a batch (root or table) to path; returns its run count."""
+    runs = batch_runs(batch)
+    write_csv(path, RUN_TABLE_COLUMNS,
+              ({"run": name, "seed": seed, **{key: "" if values[key] is None else values[key] for key in PER_RUN}}
+               for name, (seed, values) in sorted(runs.items())))
+    return len(runs)
+
+
+def paired_runs(reference_batch, variant_batch):
+    """[(run name, seed, reference values, variant values)] of the runs complete in both batches
+    (roots or run tables), by run name. Raises BatchError when none is common or a pair's seeds
+    differ."""
+    reference, variant = batch_runs(reference_batch), batch_runs(variant_batch)
     common = sorted(set(reference) & set(variant))
     if not common:
-        raise BatchError(f"'{reference_root}' and '{variant_root}' have no complete run in common")
+        raise BatchError(f"'{reference_batch}' and '{variant_batch}' have no complete run in common")
     pairs = []
     for name in common:
-        seed_a, seed_b = reference[name].summary["seed"], variant[name].summary["seed"]
+        (seed_a, values_a), (seed_b, values_b) = reference[name], variant[name]
         if seed_a != seed_b:
-            raise BatchError(f"{name}: seed {seed_a} in '{reference_root}' but {seed_b} in "
-                             f"'{variant_root}': not a paired comparison")
-        pairs.append((name, seed_a, run_values(reference[name]), run_values(variant[name])))
+            raise BatchError(f"{name}: seed {seed_a} in '{reference_batch}' but {seed_b} in "
+                             f"'{variant_batch}': not a paired comparison")
+        pairs.append((name, seed_a, values_a, values_b))
     return pairs
 
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("reference", help="reference batch root")
-    parser.add_argument("variant", help="batch root on the same base seed")
-    parser.add_argument("-o", "--out", help="CSV file of every paired run")
+    parser.add_argument("reference", nargs="?", help="reference batch root or run table")
+    parser.add_argument("variant", nargs="?", help="batch root or run table on the same base seed")
+    parser.add_argument("-o", "--out", help="CSV file of every paired run (with --table: the run table)")
+    parser.add_argument("--table", metavar="BATCH", help="write the run table of BATCH to --out instead")
     arguments = parser.parse_args(argv)
+    if arguments.table:
+        if not arguments.out or arguments.reference:
+            parser.error("--table BATCH takes -o TABLE.csv and no other batch")
+        try:
+            count = write_run_table(arguments.table, arguments.out)
+        except BatchError as error:
+            print(f"study_compare: {error}", file=sys.stderr)
+            return 1
+        print(f"{arguments.out}: {count} runs of {arguments.table}")
+        return 0
+    if not arguments.variant:
+        parser.error("give REFERENCE and VARIANT (or --table BATCH -o TABLE.csv)")
     try:
         pairs = paired_runs(arguments.reference, arguments.variant)
     except BatchError as error:
@@ -93,11 +167,7 @@ def main(argv=None):
               f"{show(row['reference_chi_eta'])} -> {show(row['variant_chi_eta'])}, episodes "
               f"{row['reference_contact_episodes']} -> {row['variant_contact_episodes']}")
     if arguments.out:
-        with open(arguments.out + ".tmp", "w", newline="") as handle:
-            writer = csv.DictWriter(handle, fieldnames=COLUMNS)
-            writer.writeheader()
-            writer.writerows(rows)
-        os.replace(arguments.out + ".tmp", arguments.out)
+        write_csv(arguments.out, COLUMNS, rows)
     return 0
 
 

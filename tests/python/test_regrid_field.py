@@ -245,3 +245,28 @@ def test_the_code_starts_from_a_regridded_forced_field(spaced_tmp, agglo):
             power[name] = float(handle["power_input"][0])
     assert power["16"] != 0.0
     assert power["24"] == pytest.approx(power["16"], rel=1e-6)
+
+
+def test_fingerprint_sees_the_content_not_the_file(spaced_tmp):
+    """Two files of the same field have one fingerprint (the content is hashed, not the file's
+    bytes); one ulp in one sample, or another forcing state, gives another."""
+    field = solenoidal_random_field((8, 6, 4))
+    first, second, changed = (spaced_tmp / f"{name}.h5" for name in ("first", "second", "changed"))
+    write_final_field(first, field)
+    write_final_field(second, field)
+
+    def fingerprint(path):
+        result = run_tool([PYTHON, TOOL, path, "--fingerprint"])
+        assert result.returncode == 0, result.stderr
+        digest, name = result.stdout.rstrip("\n").split("  ", 1)
+        assert len(digest) == 64 and name == str(path)
+        return digest
+    reference = fingerprint(first)
+    assert fingerprint(second) == reference
+    field["v"][3, 2, 1] = np.nextafter(field["v"][3, 2, 1], np.inf)
+    write_final_field(changed, field)
+    assert fingerprint(changed) != reference
+    field["v"][3, 2, 1] = np.nextafter(field["v"][3, 2, 1], -np.inf)
+    field["forcing_state"] = field["forcing_state"] + 1
+    write_final_field(changed, field)
+    assert fingerprint(changed) != reference

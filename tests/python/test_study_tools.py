@@ -223,6 +223,60 @@ def test_speed_accuracy_metrics_table_and_plots(spaced_tmp):
         assert (out / f"pareto_{metric}.png").stat().st_size > 1000
 
 
+def test_run_tables_stand_for_their_batches(spaced_tmp):
+    """A study spanning sessions keeps only each batch's run table (study_compare.py --table): the
+    analysis read from the tables must give what it gives from the run directories, every value
+    read back exactly (a float is written with all its digits), and a batch whose root is absent
+    and whose table is missing stays 'not run'."""
+    study = spaced_tmp / "study"
+    make_pair_of_batches(str(study))
+    tables = spaced_tmp / "tables"
+    tables.mkdir()
+    for name in ("disk-base", "disk-cheap"):
+        result = run_tool([PYTHON, REPO / "tools" / "study_compare.py", "--table", study / name,
+                           "-o", tables / f"{name}.csv"])
+        assert result.returncode == 0, result.stderr
+        assert "8 runs" in result.stdout
+    from_dirs = spaced_tmp / "from-dirs"
+    assert run_tool([PYTHON, REPO / "tools" / "speed_accuracy.py", study / "manifest.tsv", "-o", from_dirs,
+                     "--no-figures"]).returncode == 0
+    for name in ("disk-base", "disk-cheap"):
+        (study / name).rename(spaced_tmp / f"{name}-gone")
+    from_tables = spaced_tmp / "from-tables"
+    result = run_tool([PYTHON, REPO / "tools" / "speed_accuracy.py", study / "manifest.tsv", "-o", from_tables,
+                       "--no-figures", "--tables", tables])
+    assert result.returncode == 0, result.stderr
+    expected, got = read_csv(from_dirs / "comparison.csv"), read_csv(from_tables / "comparison.csv")
+    assert got == expected
+    assert {row["variant"]: row["status"] for row in got} == {"base": "reference", "cheap": "compared",
+                                                             "missing": "not run"}
+    # Without the tables the absent roots are 'not run'.
+    result = run_tool([PYTHON, REPO / "tools" / "speed_accuracy.py", study / "manifest.tsv", "-o",
+                       spaced_tmp / "none", "--no-figures"])
+    assert {row["status"] for row in read_csv(spaced_tmp / "none" / "comparison.csv")} == {"not run"}
+
+
+def test_save_tables_writes_one_table_per_batch_present(spaced_tmp):
+    make_pair_of_batches(str(spaced_tmp))
+    saved = spaced_tmp / "saved"
+    result = run_tool([PYTHON, REPO / "tools" / "speed_accuracy.py", spaced_tmp / "manifest.tsv", "-o",
+                       spaced_tmp / "analysis", "--no-figures", "--save-tables", saved])
+    assert result.returncode == 0, result.stderr
+    assert sorted(path.name for path in saved.iterdir()) == ["disk-base.csv", "disk-cheap.csv"]
+    rows = read_csv(saved / "disk-cheap.csv")
+    assert [int(row["seed"]) for row in rows] == list(range(1, 9))
+    # Odd seeds agglomerate; the variant flips seeds 2 and 5: agglomerated 1, 2, 3, 7.
+    assert [int(row["seed"]) for row in rows if row["outcome"] == "agglomerated"] == [1, 2, 3, 7]
+
+
+def test_a_run_table_without_its_columns_is_refused(spaced_tmp):
+    table = spaced_tmp / "disk-base.csv"
+    table.write_text("run,seed\nrun_0001,1\n")
+    result = run_tool([PYTHON, REPO / "tools" / "study_compare.py", table, table])
+    assert result.returncode == 1
+    assert "lacks the column(s) outcome" in result.stderr
+
+
 def test_pareto_front_keeps_the_non_dominated_points():
     points = [(1.0, 0.5), (2.0, 0.2), (3.0, 0.3), (4.0, 0.1), (0.5, 0.9), (2.0, 0.6)]
     assert pareto_front(points) == [4, 0, 1, 3]
@@ -345,6 +399,54 @@ def test_study_regrids_an_existing_base_field_at_once(spaced_tmp):
     listed = run_tool(command + ["--list"], cwd=work)
     assert "regridded field output/hit_box_128_on_96/final_field.h5: present" in listed.stdout
     assert regridded.stat().st_mtime_ns == before
+
+
+def test_study_skips_tabled_batches_only_on_the_same_field(spaced_tmp, agglo):
+    """A batch whose committed run table has its runs is not scheduled again, the others are; a
+    table computed from another base field (another fingerprint in FIELD) stops the study before
+    any batch. A tiny synthetic base field stands in for the converged 128^3 one."""
+    work, out, tables = spaced_tmp / "work", spaced_tmp / "sa", spaced_tmp / "tables"
+    (work / "output" / "hit_box_128").mkdir(parents=True)
+    (work / "input").symlink_to(REPO / "input")
+    base_field = work / "output" / "hit_box_128" / "final_field.h5"
+    write_final_field(base_field, solenoidal_random_field((8, 8, 8), box=(1.0e-3, 1.0e-3, 1.0e-3)))
+    tables.mkdir()
+    from study_compare import RUN_TABLE_COLUMNS
+    (tables / "disk-base.csv").write_text(",".join(RUN_TABLE_COLUMNS) + "\n" + "run_0001,1001\nrun_0002,1002\n")
+    deck = run_tool([agglo, "input/chaotic_disk_resolved.nml", "--set", "output.field_interval=0.0", "--print-deck"],
+                    cwd=REPO)
+    assert deck.returncode == 0, deck.stderr
+    (tables / "disk-base.nml").write_text(deck.stdout)
+    fingerprint = run_tool([PYTHON, REPO / "tools" / "regrid_field.py", base_field, "--fingerprint"])
+    assert fingerprint.returncode == 0, fingerprint.stderr
+    (tables / "FIELD").write_text(fingerprint.stdout)
+    command = [REPO / "tools" / "speed-accuracy-study.sh", "-o", out, "-N", "2", "--shapes", "disk",
+               "--knobs", "noise", "--tables", tables, "--slurm"]
+    result = run_tool(command, cwd=work)
+    assert result.returncode == 0, result.stderr + result.stdout
+    assert f"batch disk-base: from its run table {tables}/disk-base.csv (2 runs), not run" in result.stdout
+    submit = (out / "submit-all.sh").read_text()
+    assert "disk-perturbed/montecarlo.sbatch" in submit and "disk-base" not in submit
+    # Three runs asked for: the 2-run table no longer stands for the batch.
+    result = run_tool(command[:3] + ["-N", "3"] + command[5:], cwd=work)
+    assert result.returncode == 0, result.stderr + result.stdout
+    assert "disk-base/montecarlo.sbatch" in (out / "submit-all.sh").read_text()
+    # Runs from another base seed, or of another deck, do not stand for the batch either.
+    result = run_tool(command + ["-o", spaced_tmp / "seed", "--seed", "2001"], cwd=work)
+    assert result.returncode == 0, result.stderr + result.stdout
+    assert "disk-base/montecarlo.sbatch" in (spaced_tmp / "seed" / "submit-all.sh").read_text()
+    (tables / "disk-base.nml").write_text(deck.stdout.replace("field_interval = 0.0", "field_interval = 1.0"))
+    result = run_tool(command + ["-o", spaced_tmp / "deck"], cwd=work)
+    assert result.returncode == 0, result.stderr + result.stdout
+    assert "disk-base/montecarlo.sbatch" in (spaced_tmp / "deck" / "submit-all.sh").read_text()
+    (tables / "disk-base.nml").write_text(deck.stdout)
+    # Another field: stop before any batch, naming both fingerprints.
+    (tables / "FIELD").write_text("0" * 64 + "  output/hit_box_128/final_field.h5\n")
+    result = run_tool(command + ["-o", spaced_tmp / "other"], cwd=work)
+    assert result.returncode == 2
+    assert "computed from a base field with fingerprint " + "0" * 64 in result.stderr
+    assert fingerprint.stdout.split()[0] in result.stderr
+    assert not (spaced_tmp / "other" / "disk-perturbed").exists()
 
 
 def test_study_without_a_usable_base_field_schedules_no_grid_batch(spaced_tmp):
