@@ -215,11 +215,15 @@ def test_speed_accuracy_metrics_table_and_plots(spaced_tmp):
     # Fake runs: wall 0.01 s over 10 ms simulated -> 1e-3 s per simulated ms.
     assert float(cheap["cost_per_ms_s"]) == pytest.approx(1.0e-3, rel=1e-9)
     assert float(cheap["cost_ratio"]) == pytest.approx(1.0, rel=1e-9)      # same fake cost
+    # The gap histories are the same in both batches but for the two flipped runs: every run has a
+    # smallest gap, and the median error is that of the six identical runs.
+    assert int(cheap["gap_runs"]) == 8
+    assert float(cheap["gap_error"]) == 0.0
     assert rows["base"]["status"] == "reference"
     assert rows["missing"]["status"] == "not run"
     table = (out / "speed_accuracy.md").read_text()
     assert "| disk | cheap | base | 8 | 0.750 [" in table
-    for metric in ("outcome_disagreement", "vn_error", "chi_error", "vmax_error"):
+    for metric in ("outcome_disagreement", "vn_error", "chi_error", "vmax_error", "gap_error"):
         assert (out / f"pareto_{metric}.png").stat().st_size > 1000
 
 
