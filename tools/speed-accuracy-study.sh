@@ -57,13 +57,13 @@ Options of this study:
 
 Run tables (the study spans sessions and machines): the few numbers per complete run that the
 analysis reads (tools/study_compare.py --table) are committed in TABLES (default
-docs/figures/speed-accuracy/runs, one <batch>.csv each with its base deck <batch>.nml, and FIELD:
+docs/figures/speed-accuracy-study/runs, one <batch>.csv each with its base deck <batch>.nml, and FIELD:
 the fingerprint of the base field they were computed from, tools/regrid_field.py --fingerprint). A
 batch whose table there has its N runs from the base seed S, and whose base deck is the one this
 call would run, is not run again; the analysis reads it where the batch root is absent. The
 tables are used only when this machine's base field has the same fingerprint (the same flow to the
 bit); otherwise the script stops, and --no-tables computes every batch afresh.
-      --tables DIR       the run tables' folder (default docs/figures/speed-accuracy/runs)
+      --tables DIR       the run tables' folder (default docs/figures/speed-accuracy-study/runs)
       --no-tables        neither read nor skip by run tables
 With --publish the analysis' run tables of the batches run here are copied into TABLES as well.
 
@@ -79,7 +79,7 @@ source "$(dirname "${BASH_SOURCE[0]}")/study_lib.sh"
 study_parse_arguments "$@"
 runs=20 runs_256=5 shapes="needle disk sphere"
 knobs="noise grid geometry load_method coupling diffusion substep fidelity"
-tables=docs/figures/speed-accuracy/runs
+tables=docs/figures/speed-accuracy-study/runs
 set -- "${study_extra_arguments[@]}"
 while [ $# -gt 0 ]; do
   case "$1" in
