@@ -62,7 +62,8 @@ the fingerprint of the base field they were computed from, tools/regrid_field.py
 batch whose table there has its N runs from the base seed S, and whose base deck is the one this
 call would run, is not run again; the analysis reads it where the batch root is absent. The
 tables are used only when this machine's base field has the same fingerprint (the same flow to the
-bit); otherwise the script stops, and --no-tables computes every batch afresh.
+bit) for the batches that start from it; otherwise those batches run here (it says so), and
+--no-tables computes every batch afresh.
       --tables DIR       the run tables' folder (default docs/figures/speed-accuracy-study/runs)
       --no-tables        neither read nor skip by run tables
 With --publish the analysis' run tables of the batches run here are copied into TABLES as well.
@@ -107,16 +108,47 @@ manifest_rows=()
 declare -A declared=()
 # table_matches BATCH DECK [--set ...]: whether the committed run table of BATCH holds runs of this
 # batch: runs from the study's base seed whose base deck (TABLES/BATCH.nml, montecarlo.sh's batch.nml
-# of those runs) is DECK with these --set values as the code merges them. A matching table is linked
-# into OUT/committed-tables/, where the analysis reads the batches that have no root here.
+# of those runs) is DECK with these --set values as the code merges them, and, for a deck that starts
+# from a forced field, started from this machine's base field (table_field_matches). A matching table
+# is linked into OUT/committed-tables/, where the analysis reads the batches that have no root here.
 table_matches() {
-  local name=$1 table="$tables/$1.csv" text; shift
+  local name=$1 table="$tables/$1.csv" text fluid nx field; shift
   [ -n "$tables" ] && [ -f "$table" ] && [ -f "$tables/$name.nml" ] || return 1
   [ "$(awk -F, 'NR == 2 { print $2 }' "$table")" = "$study_seed" ] || return 1
   text=$("${AGGLO:-$study_repo/build/agglo}" "$@" --print-deck 2> /dev/null < /dev/null) || return 1
   printf '%s\n' "$text" | cmp -s - "$tables/$name.nml" || return 1
+  read -r fluid nx field <<< "$(study_deck_info "$@")"
+  if [ -n "$field" ]; then table_field_matches || return 1; fi
   [ "$study_mode" = list ] && return 0
   mkdir -p "$study_out/committed-tables" && ln -sfn "$(cd "$tables" && pwd -P)/$name.csv" "$study_out/committed-tables/$name.csv"
+}
+# table_field_matches: whether this machine's base field is the one the committed tables started from
+# (TABLES/FIELD, its fingerprint): the same flow to the bit, so that their runs pair with runs here.
+# Decided once; a missing base field or another fingerprint is said once, and the tables of the
+# batches that start from a field are then not used (those batches run here, from this field).
+table_field_state=''
+table_field_matches() {
+  if [ -z "$table_field_state" ]; then
+    local committed here
+    table_field_state=no
+    if [ ! -f "$tables/FIELD" ]; then
+      echo "run tables: $tables/FIELD is missing: the tables of batches that start from a field are not used"
+    elif [ ! -f "$base_field" ]; then
+      echo "run tables: $base_field is missing: the tables of batches that start from it are not used (make it" \
+           "first, the command in the header of ${resolved//SHAPE/${shape_list[0]}}, to continue from them)"
+    else
+      read -r committed _ < "$tables/FIELD"
+      read -r here _ < <("$study_python" "$study_tools/regrid_field.py" "$base_field" --fingerprint)
+      if [ "$committed" = "$here" ]; then
+        table_field_state=yes
+      else
+        echo "run tables: $tables were computed from a base field with fingerprint $committed, but $base_field" \
+             "has ${here:-none} (made on another machine or build?): the tables of batches that start from it" \
+             "are not used, those batches run here"
+      fi
+    fi
+  fi
+  [ "$table_field_state" = yes ]
 }
 # variant KNOB VARIANT REFERENCE DECK RUNS [--set ...]: one batch per shape (SHAPE in DECK and the
 # --set values is replaced by the shape), run once even when several knobs list it.
@@ -149,21 +181,6 @@ grid_sets() {  # n dt substeps -> --set values of a grid variant
     --set "scene.particle_substeps=$3" --set "fluid.init_file='$(regridded_field "$1")'"
 }
 for n in 96 192 256; do study_field_from "$(regridded_field "$n")" "$base_field" "$base_nx"; done
-# The committed run tables were computed from one base field: they stand for batches here only when
-# this machine's base field is that field to the bit (its fingerprint in $tables/FIELD).
-if [ -n "$tables" ] && [ -f "$tables/FIELD" ] && [ "$study_mode" != list ]; then
-  if [ -f "$base_field" ]; then
-    read -r committed _ < "$tables/FIELD"
-    read -r here _ < <("$study_python" "$study_tools/regrid_field.py" "$base_field" --fingerprint) || \
-      study_die "cannot fingerprint $base_field"
-    [ "$committed" = "$here" ] || study_die "the run tables in $tables were computed from a base field with \
-fingerprint $committed, but $base_field has $here (made on another machine or build?): their runs cannot be \
-paired with runs started from this field. Use --no-tables (and another --out) to compute every batch here."
-  elif [ "$study_mode" = run ]; then
-    study_die "$base_field is missing: make it first (the command in the header of ${resolved//SHAPE/${shape_list[0]}}), \
-then run again: its fingerprint is checked against $tables/FIELD before any batch"
-  fi
-fi
 [ "$study_mode" = list ] || rm -rf "$study_out/committed-tables"   # links of the last call, made anew
 chaotic_protocol=(--set pair.gap=2.0e-6 --set pair.relative_speed=4.2e-3 --set "pair.approach='random'"
                   --set pair.mirror_first_collision=.false. --set run.end_time=3.0e-3 --set "pair.end_rule='paper'")
