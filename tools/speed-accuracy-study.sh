@@ -240,13 +240,22 @@ if [ "$study_mode" = run ] && (( study_analysis )); then
   [ -d "$study_out/committed-tables" ] && analysis+=(--tables "$study_out/committed-tables")
   "${analysis[@]}" | tee "$study_out/analysis.txt" || study_status_all=1
   if (( study_publish )) && [ -n "$tables" ] && compgen -G "$study_out/tables/*.csv" > /dev/null; then
-    mkdir -p "$tables" || exit 1
-    for table in "$study_out"/tables/*.csv; do
-      batch=$(basename "$table" .csv)
-      cp "$table" "$tables/" && cp "$study_out/$batch/batch.nml" "$tables/$batch.nml" || study_status_all=1
-    done
-    "$study_python" "$study_tools/regrid_field.py" "$base_field" --fingerprint > "$tables/FIELD" && \
-      echo "published the run tables and their base decks into $tables" || study_status_all=1
+    # Tables of two fields never share a folder: FIELD speaks for every table in it.
+    fingerprint=$("$study_python" "$study_tools/regrid_field.py" "$base_field" --fingerprint) || fingerprint=''
+    if [ -z "$fingerprint" ]; then
+      echo "$study_name: run tables not published: no fingerprint of $base_field" >&2; study_status_all=1
+    elif [ -f "$tables/FIELD" ] && [ "$(cut -d' ' -f1 "$tables/FIELD")" != "${fingerprint%% *}" ]; then
+      echo "$study_name: run tables not published: $tables holds tables of another base field ($tables/FIELD);" \
+           "publish into another folder (--tables DIR)" >&2; study_status_all=1
+    else
+      mkdir -p "$tables" || exit 1
+      for table in "$study_out"/tables/*.csv; do
+        batch=$(basename "$table" .csv)
+        cp "$table" "$tables/" && cp "$study_out/$batch/batch.nml" "$tables/$batch.nml" || study_status_all=1
+      done
+      printf '%s\n' "$fingerprint" > "$tables/FIELD"
+      echo "published the run tables and their base decks into $tables"
+    fi
   fi
 fi
 study_finish
