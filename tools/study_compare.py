@@ -20,6 +20,7 @@ changed. Exit status: 0 done, 1 unusable input.
 """
 import argparse
 import csv
+import functools
 import os
 import sys
 
@@ -79,8 +80,10 @@ def read_run_table(path):
     return runs
 
 
+@functools.lru_cache(maxsize=None)
 def batch_runs(batch):
-    """{run name: (seed, PER_RUN values)} of the complete runs of a batch root or a run table."""
+    """{run name: (seed, PER_RUN values)} of the complete runs of a batch root or a run table; read
+    once per process (the analysis asks for a batch's cost and for its pairs), not to be mutated."""
     if is_run_table(batch):
         return read_run_table(batch)
     return {os.path.basename(r.directory): (r.summary["seed"], run_values(r)) for r in load_runs([batch])[0]}
