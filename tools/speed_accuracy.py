@@ -180,21 +180,45 @@ def pareto_front(points):
     return front
 
 
+def spread_labels(anchors, width, height):
+    """Label positions (display units) near their points' anchors that do not overlap: a label is
+    width x height, placed at its anchor and, while it overlaps one already placed, moved up by
+    height. Labels are placed by rising anchor (y, then x). Returns the positions in the anchors'
+    order."""
+    placed = [None] * len(anchors)
+    done = []
+    for k in sorted(range(len(anchors)), key=lambda k: (anchors[k][1], anchors[k][0])):
+        x, y = anchors[k]
+        while any(abs(x - px) < width and abs(y - py) < height for px, py in done):
+            y += height
+        placed[k] = (x, y)
+        done.append((x, y))
+    return placed
+
+
 def pareto_plots(rows, directory):
     """One PNG per metric: error against wall seconds per simulated ms, a panel per shape.
-    Returns the files written."""
+    Returns the files written.
+
+    The error axis is linear below 1e-4 and logarithmic above (the errors span round-off to
+    several hundred per cent), so a zero error (the references) sits on the axis' foot; the
+    outcome disagreement, a multiple of 1/runs, is linear. A
+    reference shared by several knobs is drawn once; labels that would overlap are stacked."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     shapes = list(dict.fromkeys(row["shape"] for row in rows))
     knobs = list(dict.fromkeys(row["knob"] for row in rows))
+    references = {(row["shape"], row["reference"]) for row in rows}
     written = []
     for metric, description in METRICS:
-        figure, axes = plt.subplots(1, len(shapes), figsize=(4.5 * len(shapes), 4), squeeze=False)
+        figure, axes = plt.subplots(1, len(shapes), figsize=(5.5 * len(shapes), 5), squeeze=False)
         for axis, shape in zip(axes[0], shapes):
-            points, labels = [], []
+            points, names, drawn = [], [], set()
             for row in rows:
-                if row["shape"] != shape or row["cost_per_ms_s"] == "":
+                is_reference = row["variant"] == row["reference"]
+                key = row["variant"] if is_reference else (row["knob"], row["variant"])
+                if row["shape"] != shape or row["cost_per_ms_s"] == "" or key in drawn:
                     continue
                 if metric == "outcome_disagreement":
                     error = "" if row["outcome_agreement"] == "" else 1.0 - row["outcome_agreement"]
@@ -202,25 +226,39 @@ def pareto_plots(rows, directory):
                     error = row[metric]
                 if error == "":
                     continue
-                colour = f"C{knobs.index(row['knob']) % 10}"
-                axis.scatter(row["cost_per_ms_s"], error, color=colour, s=18,
-                             label=row["knob"] if row["knob"] not in labels else None)
-                labels.append(row["knob"])
-                axis.annotate(row["variant"], (row["cost_per_ms_s"], error), fontsize=6,
-                              xytext=(3, 2), textcoords="offset points")
+                drawn.add(key)
+                knob = "reference" if is_reference else row["knob"]
+                colour = "k" if is_reference else f"C{knobs.index(row['knob']) % 10}"
+                axis.scatter(row["cost_per_ms_s"], error, color=colour, s=18, zorder=2,
+                             marker="s" if is_reference else "o",
+                             label=knob if knob not in axis.get_legend_handles_labels()[1] else None)
                 points.append((row["cost_per_ms_s"], error))
+                # A reference that is also a variant of another knob (the base against grid192).
+                names.append(row["variant"] if is_reference or (shape, row["variant"]) not in references
+                             else f"{row['variant']} (vs {row['reference']})")
             if points:
                 front = pareto_front(points)
                 axis.plot([points[k][0] for k in front], [points[k][1] for k in front], color="0.5",
-                          linewidth=0.8, zorder=0)
+                          linewidth=0.8, zorder=1)
                 axis.set_xscale("log")
-                axis.legend(fontsize=6)
+                if metric == "outcome_disagreement":     # multiples of 1/runs: linear
+                    axis.set_ylim(bottom=-0.02, top=1.05)
+                else:
+                    axis.set_yscale("symlog", linthresh=1.0e-4, linscale=0.3)
+                    axis.set_ylim(bottom=0.0, top=max(1.0, 2.0 * max(p[1] for p in points)))
+                axis.legend(fontsize=6, loc="best")
+                figure.canvas.draw()
+                to_display, to_data = axis.transData, axis.transData.inverted()
+                anchors = [tuple(to_display.transform(point) + (4.0, 2.0)) for point in points]
+                for name, position in zip(names, spread_labels(anchors, 55.0, 9.0)):
+                    axis.annotate(name, to_data.transform(position), fontsize=6, va="bottom")
             else:
                 axis.text(0.5, 0.5, "no compared batch yet", transform=axis.transAxes, ha="center",
                           va="center", color="0.4")
             axis.set_title(shape)
             axis.set_xlabel("wall s per simulated ms (median run)")
-        axes[0][0].set_ylabel(description)
+        axes[0][0].set_ylabel(description if metric == "outcome_disagreement"
+                              else description + "\n(axis linear below 1e-4)")
         figure.tight_layout()
         path = os.path.join(directory, f"pareto_{metric}.png")
         figure.savefig(path, dpi=150)

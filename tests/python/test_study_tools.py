@@ -16,7 +16,7 @@ import pytest
 from agglo_stats import contact_episodes, lever_arm
 from conftest import AGGLO_STATS, REPO, run_tool
 from fake_pair_scene import write_run
-from speed_accuracy import pareto_front
+from speed_accuracy import pareto_front, spread_labels
 from synthetic_fields import solenoidal_random_field, write_final_field
 
 PYTHON = REPO / ".venv" / "bin" / "python"
@@ -284,6 +284,20 @@ def test_a_run_table_without_its_columns_is_refused(spaced_tmp):
 def test_pareto_front_keeps_the_non_dominated_points():
     points = [(1.0, 0.5), (2.0, 0.2), (3.0, 0.3), (4.0, 0.1), (0.5, 0.9), (2.0, 0.6)]
     assert pareto_front(points) == [4, 0, 1, 3]
+
+
+def test_spread_labels_stacks_overlapping_labels_and_keeps_the_others():
+    # Three labels at nearly one anchor (the resolved variants of nearly one cost and error) are
+    # stacked a label height apart from the lowest (the third, at 6, moves up past 5 + 9 to
+    # 6 + 2 x 9); a label far to the right and one far above stay put.
+    anchors = [(10.0, 5.0), (10.0, 5.0), (12.0, 6.0), (200.0, 5.0), (11.0, 100.0)]
+    placed = spread_labels(anchors, width=50.0, height=9.0)
+    assert placed[3] == (200.0, 5.0) and placed[4] == (11.0, 100.0)    # the anchors, unchanged
+    assert [y for x, y in placed[:3]] == pytest.approx([5.0, 14.0, 24.0], abs=1e-12)
+    for k in range(len(placed)):
+        for j in range(k):
+            overlap = abs(placed[k][0] - placed[j][0]) < 50.0 and abs(placed[k][1] - placed[j][1]) < 9.0
+            assert not overlap, (k, j)
 
 
 def test_speed_accuracy_refuses_a_manifest_without_columns(spaced_tmp):
