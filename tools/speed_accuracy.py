@@ -250,7 +250,7 @@ def pareto_plots(rows, directory):
                 figure.canvas.draw()
                 to_display, to_data = axis.transData, axis.transData.inverted()
                 anchors = [tuple(to_display.transform(point) + (4.0, 2.0)) for point in points]
-                # A 6-point label at 150 dpi: about 55 x 9 pixels for the longest variant names.
+                # Display units of the 100-dpi figure: a 6-point label is 8 px high, 55 px wide for most names.
                 for name, position in zip(names, spread_labels(anchors, 55.0, 9.0)):
                     axis.annotate(name, to_data.transform(position), fontsize=6, va="bottom")
             else:
