@@ -117,7 +117,11 @@ def compare_row(row, reference_batch):
     try:
         pairs = paired_runs(reference_batch, row["batch"])
     except BatchError as error:
-        out["status"] = f"no comparison: {error}"
+        # The table is published: name the batches as the manifest does, not by this machine's paths.
+        reason = str(error)
+        for folder in {os.path.dirname(row["batch"]), os.path.dirname(reference_batch)}:
+            reason = reason.replace(folder + os.sep, "")
+        out["status"] = f"no comparison: {reason}"
         return out
     same = sum(r["outcome"] == v["outcome"] for _n, _s, r, v in pairs)
     low, high = wilson_interval(same, len(pairs))

@@ -227,6 +227,25 @@ def test_speed_accuracy_metrics_table_and_plots(spaced_tmp):
         assert (out / f"pareto_{metric}.png").stat().st_size > 1000
 
 
+def test_speed_accuracy_names_a_batch_without_complete_runs_by_its_name(spaced_tmp):
+    """A batch whose runs all stopped (the code refuses a too-thin disk at its start) is reported in
+    the published table by its manifest name, not by the path of the machine that ran it."""
+    make_pair_of_batches(str(spaced_tmp))
+    refused = spaced_tmp / "disk-refused"
+    (refused / "run_0001").mkdir(parents=True)
+    (refused / "run_0001" / "agglo.log").write_text("error: the disk is too thin for this grid\n")
+    (refused / "batch.conf").write_text("base_seed=1\n")
+    with open(spaced_tmp / "manifest.tsv", "a") as handle:
+        handle.write("demo\trefused\tdisk\tdisk-refused\tbase\n")
+    out = spaced_tmp / "analysis"
+    result = run_tool([PYTHON, REPO / "tools" / "speed_accuracy.py", spaced_tmp / "manifest.tsv", "-o", out,
+                       "--no-figures"])
+    assert result.returncode == 0, result.stderr
+    status = {row["variant"]: row["status"] for row in read_csv(out / "comparison.csv")}["refused"]
+    assert status.startswith("no comparison: no complete run in disk-refused:"), status
+    assert str(spaced_tmp) not in (out / "speed_accuracy.md").read_text()
+
+
 def test_run_tables_stand_for_their_batches(spaced_tmp):
     """A study spanning sessions keeps only each batch's run table (study_compare.py --table): the
     analysis read from the tables must give what it gives from the run directories, every value
