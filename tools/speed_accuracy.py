@@ -119,7 +119,7 @@ def compare_row(row, reference_batch):
     except BatchError as error:
         # The table is published: name the batches as the manifest does, not by this machine's paths.
         reason = str(error)
-        for folder in {os.path.dirname(row["batch"]), os.path.dirname(reference_batch)}:
+        for folder in {os.path.dirname(row["batch"]), os.path.dirname(reference_batch)} - {""}:
             reason = reason.replace(folder + os.sep, "")
         out["status"] = f"no comparison: {reason}"
         return out
