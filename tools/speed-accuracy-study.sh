@@ -50,7 +50,7 @@ root after `make build tools-deps`.
 
 Options of this study:
   -N, --runs N           seeds per shape (default 20)
-      --runs-256 M       seeds of the 256^3 subset (default 5; 0 skips it)
+      --runs-256 M       seeds of the 256^3 subset (default 3; 0 skips it)
       --shapes "A B"     shapes (default "needle disk sphere")
       --knobs "K ..."    knobs (default "noise grid geometry load_method coupling diffusion substep
                          fidelity")
@@ -78,7 +78,7 @@ EOF
 
 source "$(dirname "${BASH_SOURCE[0]}")/study_lib.sh"
 study_parse_arguments "$@"
-runs=20 runs_256=5 shapes="needle disk sphere"
+runs=20 runs_256=3 shapes="needle disk sphere"
 knobs="noise grid geometry load_method coupling diffusion substep fidelity"
 tables=docs/figures/speed-accuracy-study/runs
 set -- "${study_extra_arguments[@]}"
