@@ -23,7 +23,9 @@ root after `make build tools-deps`.
   geometry     mesh80/320/1280  &bodies geometry = 'mesh', mesh_level = 1/2/3              base
   load_method  surface      &bodies load_method = 'surface' (mesh_level 2)                  base
   coupling     explicit     &scene ibm_coupling = 'explicit'                                 base
-  diffusion    cn2/cn5/cn10 &fluid viscous_scheme = 'crank_nicolson', dt 2/5/10 x 4.8e-6 s,  base
+  diffusion    dt2.4e-6     explicit diffusion at half the decks' step (dt 2.4e-6 s, 12      base
+                            sub-steps): the time error of the base itself
+               cn2/cn5/cn10 &fluid viscous_scheme = 'crank_nicolson', dt 2/5/10 x 4.8e-6 s,  base
                             sub-steps 48/120/240 (particle step stays 2e-7 s)
   substep      substep6e-7/1.2e-6/2.4e-6  particle_substeps 8/4/2 (particle step 6e-7..2.4e-6 s)  base
   noise        perturbed    &pair gap 2.000000000002e-6 m (1e-12 relative): the round-off     base
@@ -212,6 +214,8 @@ for knob in "${knob_list[@]}"; do
       variant coupling explicit base "$resolved" "$runs" "${quiet[@]}" --set "scene.ibm_coupling='explicit'" ;;
     diffusion)
       variant diffusion base base "$resolved" "$runs" "${quiet[@]}"
+      # The finer explicit step: how far the base's own fluid step moves each metric.
+      variant diffusion dt2.4e-6 base "$resolved" "$runs" "${quiet[@]}" --set run.dt=2.4e-6 --set scene.particle_substeps=12
       for factor in 2 5 10; do
         variant diffusion "cn$factor" base "$resolved" "$runs" "${quiet[@]}" \
           --set "fluid.viscous_scheme='crank_nicolson'" --set "run.dt=$(awk -v f="$factor" 'BEGIN { printf "%.1e", 4.8e-6 * f }')" \

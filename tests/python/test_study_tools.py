@@ -359,6 +359,7 @@ def test_study_scripts_list_their_batches():
     assert result.returncode == 0, result.stderr
     assert "disk-cn5" in result.stdout and "run.dt=2.4e-05" in result.stdout
     assert "scene.particle_substeps=120" in result.stdout
+    assert "disk-dt2.4e-6" in result.stdout and "run.dt=2.4e-6" in result.stdout
     assert "disk-substep2.4e-6" in result.stdout and "scene.particle_substeps=2" in result.stdout
 
 
