@@ -40,6 +40,9 @@ Options:
                          submit it with: sbatch ROOT/montecarlo.sbatch
       --sbatch-option O  extra "#SBATCH O" line, e.g. --sbatch-option --partition=short (repeatable)
       --status           print how many runs are complete / failed / not run, run nothing
+  -F, --from-run K       this call's runs are K..N only (default 1): runs 1..K-1 are kept elsewhere
+                         (a study's run table of an earlier session, their directories gone) and
+                         are neither run nor counted; run i still gets seed S+i-1
   -h, --help             this text
 
 Resume: call the same command again. Complete runs (summary.json present, no FAILED marker) are
@@ -106,7 +109,7 @@ format_seconds() { # milliseconds -> "0.4s", "12s", "3m05s", "2h10m"
 # Arguments
 # ---------------------------------------------------------------------------------------------
 deck='' runs='' base_seed='' root='' jobs=1 jobs_given=0 ranks=1 agglo=${AGGLO:-} launcher=''
-time_limit='' slurm=0 status_only=0
+time_limit='' slurm=0 status_only=0 first_run=1
 declare -a sbatch_options=() user_sets=() set_arguments=()
 need_value() { [[ $# -ge 2 ]] || die "option $1 needs a value (see --help)"; }
 while [[ $# -gt 0 ]]; do
@@ -125,6 +128,7 @@ while [[ $# -gt 0 ]]; do
     --slurm) slurm=1 ;;
     --sbatch-option) need_value "$@"; sbatch_options+=("$2"); shift ;;
     --status) status_only=1 ;;
+    -F|--from-run) need_value "$@"; first_run=$2; shift ;;
     *) die "unknown argument '$1' (see --help)" ;;
   esac
   shift
@@ -140,6 +144,8 @@ if [[ -n $time_limit ]]; then
   [[ $time_limit =~ ^[1-9][0-9]*$ ]] || die "--time '$time_limit' is not allowed; allowed: whole minutes >= 1"
 fi
 (( runs <= 99999 )) || die "--runs $runs is not allowed; allowed: at most 99999"
+[[ $first_run =~ ^[1-9][0-9]*$ ]] && (( first_run <= runs )) || \
+  die "--from-run '$first_run' is not allowed; allowed: an integer from 1 to --runs ($runs)"
 for set_text in "${user_sets[@]}"; do
   [[ $set_text =~ ^([A-Za-z][A-Za-z0-9_]*)\.([A-Za-z][A-Za-z0-9_]*)=(.+)$ ]] || \
     die "--set '$set_text' is not allowed; allowed: GROUP.VARIABLE=VALUE, e.g. run.end_time=2e-3"
@@ -209,17 +215,18 @@ else
 fi
 
 run_name() { printf 'run_%04d' "$1"; }
+runs_kept_elsewhere() { (( first_run == 1 )) || printf ' (runs 1-%d kept elsewhere, --from-run)' $((first_run - 1)); }
 
 if (( status_only )); then
   complete=0; failed=0; not_run=0
-  for ((i = 1; i <= runs; i++)); do
+  for ((i = first_run; i <= runs; i++)); do
     dir="$root/$(run_name "$i")"
     if run_is_complete "$dir"; then complete=$((complete + 1))
     elif [[ -e $dir/FAILED ]]; then failed=$((failed + 1))
     else not_run=$((not_run + 1)); fi
   done
-  say "batch $root: $runs runs: $complete complete, $failed failed, $not_run not run or incomplete"
-  (( complete == runs )); exit $?
+  say "batch $root: $runs runs$(runs_kept_elsewhere): $complete complete, $failed failed, $not_run not run or incomplete"
+  (( complete == runs - first_run + 1 )); exit $?
 fi
 
 # ---------------------------------------------------------------------------------------------
@@ -249,7 +256,7 @@ workdir=$(pwd -P)
 
 pending=()
 already=0
-for ((i = 1; i <= runs; i++)); do
+for ((i = first_run; i <= runs; i++)); do
   if run_is_complete "$root/$(run_name "$i")"; then already=$((already + 1)); else pending+=("$i"); fi
 done
 
@@ -257,7 +264,7 @@ done
 # Slurm: a job-array script with one task per incomplete run.
 # ---------------------------------------------------------------------------------------------
 if (( slurm )); then
-  if (( ${#pending[@]} == 0 )); then say "batch $root: all $runs runs are complete; no script written"; exit 0; fi
+  if (( ${#pending[@]} == 0 )); then say "batch $root: all $((runs - first_run + 1)) runs are complete$(runs_kept_elsewhere); no script written"; exit 0; fi
   array='' first='' last=''
   for i in "${pending[@]}" ''; do              # compress the indices into ranges "1-4,7,9-12"
     if [[ -n $last && $i == $((last + 1)) ]]; then last=$i; continue; fi
@@ -298,7 +305,7 @@ record_run_result "$dir" $?
 EOF
   } > "$script.tmp" && mv -f "$script.tmp" "$script" || die "cannot write '$script'"
   chmod +x "$script"
-  say "wrote $script: ${#pending[@]} array tasks ($already of $runs runs already complete); submit with: sbatch $(printf '%q' "$script")"
+  say "wrote $script: ${#pending[@]} array tasks ($already of $((runs - first_run + 1)) runs already complete$(runs_kept_elsewhere)); submit with: sbatch $(printf '%q' "$script")"
   exit 0
 fi
 
@@ -306,7 +313,7 @@ fi
 # Local runs, up to `jobs` at once.
 # ---------------------------------------------------------------------------------------------
 total=${#pending[@]}
-say "batch $root: $runs runs, $already already complete, $total to run, $jobs at a time, $ranks rank(s) each"
+say "batch $root: $runs runs$(runs_kept_elsewhere), $already already complete, $total to run, $jobs at a time, $ranks rank(s) each"
 (( total == 0 )) && exit 0
 
 run_command=()
@@ -384,10 +391,10 @@ done
   done
 } > "$root/failed.txt"
 complete=0
-for ((i = 1; i <= runs; i++)); do run_is_complete "$root/$(run_name "$i")" && complete=$((complete + 1)); done
-if (( complete == runs )); then
-  say "batch $root: all $runs runs complete ($already were already complete); wall time $(format_seconds $(($(now_ms) - batch_start)))"
+for ((i = first_run; i <= runs; i++)); do run_is_complete "$root/$(run_name "$i")" && complete=$((complete + 1)); done
+if (( complete == runs - first_run + 1 )); then
+  say "batch $root: all $complete runs complete$(runs_kept_elsewhere) ($already were already complete); wall time $(format_seconds $(($(now_ms) - batch_start)))"
   exit 0
 fi
-say "batch $root: $complete of $runs runs complete; ${#failed_runs[@]} failed (listed in $root/failed.txt); call the same command again to rerun them"
+say "batch $root: $complete of $((runs - first_run + 1)) runs complete$(runs_kept_elsewhere); ${#failed_runs[@]} failed (listed in $root/failed.txt); call the same command again to rerun them"
 exit 1

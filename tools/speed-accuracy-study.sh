@@ -62,8 +62,10 @@ analysis reads (tools/study_compare.py --table) are committed in TABLES (default
 docs/figures/speed-accuracy-study/runs, one <batch>.csv each with its base deck <batch>.nml, and FIELD:
 the fingerprint of the base field they were computed from, tools/regrid_field.py --fingerprint). A
 batch whose table there has its N runs from the base seed S, and whose base deck is the one this
-call would run, is not run again; the analysis reads it where the batch root is absent. The
-tables are used only when this machine's base field has the same fingerprint (the same flow to the
+call would run, is not run again; the analysis reads it where the batch root is absent. A table
+with fewer runs (runs 1..M of a session that ended) continues its batch: only runs M+1..N run here
+(montecarlo.sh --from-run), the table is kept in the root as earlier_runs.csv, and the analysis
+and --publish take the batch as those rows and the runs here. The tables are used only when this machine's base field has the same fingerprint (the same flow to the
 bit) for the batches that start from it; otherwise those batches run here (it says so), and
 --no-tables computes every batch afresh.
       --tables DIR       the run tables' folder (default docs/figures/speed-accuracy-study/runs)
@@ -161,15 +163,30 @@ variant() {
     [ -n "${declared[$shape-$name]+x}" ] && continue
     declared[$shape-$name]=1
     local -a sets=("${@//SHAPE/$shape}")
-    # A matching table with COUNT runs stands for a batch that has no root here: not run again.
-    if table_matches "$shape-$name" "${deck//SHAPE/$shape}" "${sets[@]}" && study_selected "$shape-$name" \
-       && [ ! -d "$study_out/$shape-$name" ] && (( $(wc -l < "$tables/$shape-$name.csv") - 1 >= count )); then
-      [ "$study_mode" = list ] && study_batch "$shape-$name" "${deck//SHAPE/$shape}" "$count" "${sets[@]}"
-      echo "batch $shape-$name: from its run table $tables/$shape-$name.csv ($count runs), not run"
-      continue
+    local table="$tables/$shape-$name.csv" root="$study_out/$shape-$name" tabled
+    if table_matches "$shape-$name" "${deck//SHAPE/$shape}" "${sets[@]}" && study_selected "$shape-$name"; then
+      tabled=$(( $(wc -l < "$table") - 1 ))
+      if [ ! -d "$root" ] && (( tabled >= count )); then
+        # A matching table with COUNT runs stands for a batch that has no root here: not run again.
+        [ "$study_mode" = list ] && study_batch "$shape-$name" "${deck//SHAPE/$shape}" "$count" "${sets[@]}"
+        echo "batch $shape-$name: from its run table $table ($count runs), not run"
+        continue
+      fi
+      if (( tabled < count )) && { [ ! -d "$root" ] || [ -f "$root/earlier_runs.csv" ]; } && table_is_prefix "$table"; then
+        # Fewer runs: the batch continues after them (study_batch, study_earlier_table).
+        echo "batch $shape-$name: runs 1-$tabled from its run table $table, runs $((tabled + 1))-$count here"
+        study_earlier_table=$table
+      fi
     fi
     study_batch "$shape-$name" "${deck//SHAPE/$shape}" "$count" "${sets[@]}"
+    study_earlier_table=''
   done
+}
+# table_is_prefix TABLE: whether the run table holds exactly the runs 1..M of its batch (run_0001 with
+# the base seed, and so on), so that the batch can continue from run M+1.
+table_is_prefix() {
+  awk -F, -v seed="$study_seed" 'NR > 1 && ($1 != sprintf("run_%04d", NR - 1) || $2 != seed + NR - 2) { bad = 1 }
+                                 END { exit bad }' "$1"
 }
 resolved=input/chaotic_SHAPE_resolved.nml
 # Every grid variant starts from the base decks' converged field (output/hit_box_128/final_field.h5)

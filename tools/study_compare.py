@@ -11,7 +11,10 @@ this tool gives the runs. speed_accuracy.py uses paired_runs for its error metri
 
 A batch is either a batch root of run directories or its run table: a CSV of one row per complete
 run (RUN_TABLE_COLUMNS, written by write_run_table or `--table`), the few numbers per run a study
-keeps once its raw runs are gone (the committed statistics of a study that spans sessions).
+keeps once its raw runs are gone (the committed statistics of a study that spans sessions). A batch
+root continued in a later session (tools/montecarlo.sh --from-run K) holds the run table of its runs
+1..K-1 as ROOT/earlier_runs.csv: the batch is those rows and its complete run directories (a run
+complete in both counts by its directory).
 
 Usage: .venv/bin/python tools/study_compare.py REFERENCE VARIANT [-o FILE.csv]
        .venv/bin/python tools/study_compare.py --table BATCH_ROOT -o TABLE.csv
@@ -33,6 +36,7 @@ PER_RUN = ("outcome", "collisions", "contact_episodes", "normal_velocity_before"
 COLUMNS = ("run", "seed", "changed") + tuple(f"{side}_{key}" for key in PER_RUN
                                               for side in ("reference", "variant"))
 RUN_TABLE_COLUMNS = ("run", "seed") + PER_RUN
+EARLIER_RUNS = "earlier_runs.csv"   # in a batch root: the run table of its runs of an earlier session
 _TEXT_VALUES = ("outcome",)
 _INTEGER_VALUES = ("collisions", "contact_episodes")
 
@@ -82,11 +86,20 @@ def read_run_table(path):
 
 @functools.lru_cache(maxsize=None)
 def batch_runs(batch):
-    """{run name: (seed, PER_RUN values)} of the complete runs of a batch root or a run table; read
-    once per process (the analysis asks for a batch's cost and for its pairs), not to be mutated."""
+    """{run name: (seed, PER_RUN values)} of the complete runs of a batch root (with the rows of its
+    EARLIER_RUNS table, when it has one) or a run table; read once per process (the analysis asks for
+    a batch's cost and for its pairs), not to be mutated."""
     if is_run_table(batch):
         return read_run_table(batch)
-    return {os.path.basename(r.directory): (r.summary["seed"], run_values(r)) for r in load_runs([batch])[0]}
+    earlier_table = os.path.join(batch, EARLIER_RUNS)
+    earlier = read_run_table(earlier_table) if os.path.isfile(earlier_table) else {}
+    try:
+        here = {os.path.basename(r.directory): (r.summary["seed"], run_values(r)) for r in load_runs([batch])[0]}
+    except BatchError:
+        if not earlier:
+            raise
+        here = {}                     # a continued batch whose own runs have not completed yet
+    return {**earlier, **here}
 
 
 def write_csv(path, columns, rows):

@@ -252,9 +252,15 @@ study_time_row() {  # batch runs jobs runs_run wall status
 
 # study_batch NAME DECK RUNS [--set G.V=VALUE ...]: one Monte-Carlo batch OUT/NAME of the study.
 # Resolved decks (with a &fluid init_file) get their forced field first and run on --ranks ranks.
+# A batch continued from an earlier session: when the caller sets study_earlier_table to the run
+# table of the batch's runs 1..K-1 (their directories gone; tools/study_compare.py), only runs
+# K..RUNS run here (montecarlo.sh --from-run K) and the table is kept in the root as
+# earlier_runs.csv, where the analysis reads those runs.
+study_earlier_table=''
 study_batch() {
   local name=$1 deck=$2 runs=$3; shift 3
-  local root="$study_out/$name" fluid field nx ranks=1 before=0 start end status
+  local root="$study_out/$name" fluid field nx ranks=1 before=0 start end status first_run=1
+  [ -n "$study_earlier_table" ] && first_run=$(wc -l < "$study_earlier_table")   # a header and K-1 rows
   study_selected "$name" || return 0
   study_batches+=("$name")
   read -r fluid nx field <<< "$(study_deck_info "$deck" "$@")"
@@ -266,6 +272,7 @@ study_batch() {
   fi
   local -a common=(--deck "$deck" --runs "$runs" --seed "$study_seed" --out "$root" --ranks "$ranks" "$@")
   [ -n "$study_launcher" ] && common+=(--launcher "$study_launcher")
+  (( first_run > 1 )) && common+=(--from-run "$first_run")
   case "$study_mode" in
     status)
       [ -n "$field" ] && study_forced_field "$field" "$nx"
@@ -281,6 +288,7 @@ study_batch() {
       (( study_jobs_given )) && slurm+=(--jobs "$study_jobs")
       local option; for option in "${study_sbatch_options[@]}"; do slurm+=(--sbatch-option "$option"); done
       "$study_tools/montecarlo.sh" "${common[@]}" "${slurm[@]}" || { study_status_all=1; return 0; }
+      study_keep_earlier_runs "$root"
       if [ -f "$root/montecarlo.sbatch" ]; then
         local dependency=''
         [ -n "$field" ] && [ -n "${study_field_jobs[$field]}" ] && \
@@ -300,7 +308,8 @@ study_batch() {
   "$study_tools/montecarlo.sh" "${common[@]}" -j "$study_jobs"
   status=$?
   end=$(date +%s.%N)
-  study_time_row "$root" "$runs" "$study_jobs" $((runs - before)) "$(echo "$end - $start" | bc)" "$status"
+  study_keep_earlier_runs "$root"
+  study_time_row "$root" "$runs" "$study_jobs" $((runs - first_run + 1 - before)) "$(echo "$end - $start" | bc)" "$status"
   [ "$status" -eq 0 ] || { echo "$study_name: batch $root exit status $status" >&2; study_status_all=1; }
   study_prune "$root"
 }
@@ -348,6 +357,14 @@ study_reuse_runs() {
 # study_prune ROOT: the bulky files of the complete runs of a batch. Checkpoints are only needed to
 # restart a run, and a complete run is never restarted; the analysis reads summary.json and
 # particles.h5, not the field snapshots (fields_<step>.h5, fields.xdmf) or the final field.
+# study_keep_earlier_runs ROOT: study_earlier_table (if set) as ROOT/earlier_runs.csv, once montecarlo.sh
+# has made the root (it refuses a non-empty root without its batch.conf).
+study_keep_earlier_runs() {
+  [ -n "$study_earlier_table" ] && [ -f "$1/batch.conf" ] || return 0
+  cmp -s "$study_earlier_table" "$1/earlier_runs.csv" && return 0
+  cp "$study_earlier_table" "$1/earlier_runs.csv.tmp" && mv -f "$1/earlier_runs.csv.tmp" "$1/earlier_runs.csv" || study_status_all=1
+}
+
 study_prune() {
   local run
   for run in "$1"/run_*/; do

@@ -103,6 +103,9 @@ def test_bad_arguments_are_refused(agglo, spaced_tmp):
     assert result.returncode == 2 and "is not a readable file" in result.stderr
     result = montecarlo(agglo, deck, "2", "1", spaced_tmp / "root", "--set", "run.seed=4")
     assert result.returncode == 2 and "run.seed is not allowed" in result.stderr
+    result = montecarlo(agglo, deck, "2", "1", spaced_tmp / "root", "--from-run", "3")
+    assert result.returncode == 2 and "--from-run '3' is not allowed; allowed: an integer from 1 to --runs (2)" \
+        in result.stderr
     (spaced_tmp / "unrelated").mkdir()
     (spaced_tmp / "unrelated" / "notes.txt").write_text("x")
     result = montecarlo(agglo, deck, "2", "1", spaced_tmp / "unrelated")
@@ -204,6 +207,22 @@ def test_real_batch_statistics(real_batch, tmp_path):
     for stem in ("separation_pdf", "relative_velocity_pdf", "max_vdw_force_pdf", "psi_pdf",
                  "collision_points_pdf", "histories"):
         assert (out / f"{stem}.png").stat().st_size > 5000 and (out / f"{stem}.pdf").exists(), stem
+
+
+def test_from_run_runs_only_the_later_runs(pair_scene, spaced_tmp):
+    """--from-run 3: runs 1-2 are kept elsewhere (a study's run table): only run 3 runs, with seed
+    S+2, and the batch is complete without runs 1-2."""
+    agglo, pair_deck = pair_scene
+    root = spaced_tmp / "continued batch"
+    result = montecarlo(agglo, pair_deck, "3", "40", root, "--from-run", "3")
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert "3 runs (runs 1-2 kept elsewhere, --from-run), 0 already complete, 1 to run" in result.stdout
+    assert complete_runs(str(root), 3) == {3} and summary(str(root), 3)["seed"] == 42
+    assert not (root / "run_0001").exists()
+    status = montecarlo(agglo, pair_deck, "3", "40", root, "--from-run", "3", "--status")
+    assert status.returncode == 0 and "1 complete, 0 failed, 0 not run" in status.stdout
+    status = montecarlo(agglo, pair_deck, "3", "40", root, "--status")   # all three: two not run
+    assert status.returncode == 1 and "1 complete, 0 failed, 2 not run" in status.stdout
 
 
 def test_resume_after_the_batch_is_killed_mid_way(pair_scene, spaced_tmp):

@@ -8,6 +8,7 @@ import csv
 import json
 import math
 import os
+import shutil
 
 import h5py
 import numpy as np
@@ -279,6 +280,36 @@ def test_run_tables_stand_for_their_batches(spaced_tmp):
     assert {row["status"] for row in read_csv(spaced_tmp / "none" / "comparison.csv")} == {"not run"}
 
 
+def test_a_batch_continued_from_its_run_table_counts_both(spaced_tmp):
+    """A batch continued in a later session (montecarlo.sh --from-run 5) holds runs 5-8 as directories
+    and runs 1-4 as its earlier_runs.csv: the analysis and the saved table must be what the whole
+    batch of directories gives; while none of its own runs is complete it is the earlier rows."""
+    study = spaced_tmp / "study"
+    make_pair_of_batches(str(study))
+    whole = spaced_tmp / "whole"
+    assert run_tool([PYTHON, REPO / "tools" / "speed_accuracy.py", study / "manifest.tsv", "-o", whole,
+                     "--no-figures", "--save-tables", whole / "tables"]).returncode == 0
+    table = read_csv(whole / "tables" / "disk-cheap.csv")
+    with open(study / "disk-cheap" / "earlier_runs.csv", "w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=list(table[0]), lineterminator="\n")
+        writer.writeheader()
+        writer.writerows(table[:4])
+    for seed in range(1, 5):
+        (study / "disk-cheap" / f"run_{seed:04d}").rename(spaced_tmp / f"gone_{seed}")
+    continued = spaced_tmp / "continued"
+    result = run_tool([PYTHON, REPO / "tools" / "speed_accuracy.py", study / "manifest.tsv", "-o", continued,
+                       "--no-figures", "--save-tables", continued / "tables"])
+    assert result.returncode == 0, result.stderr
+    assert read_csv(continued / "comparison.csv") == read_csv(whole / "comparison.csv")
+    assert read_csv(continued / "tables" / "disk-cheap.csv") == table
+    # Runs 5-8 not complete (FAILED): the batch is its four earlier runs, seeds 1-4.
+    for seed in range(5, 9):
+        (study / "disk-cheap" / f"run_{seed:04d}" / "FAILED").write_text("reason: test\n")
+    result = run_tool([PYTHON, REPO / "tools" / "study_compare.py", study / "disk-base", study / "disk-cheap"])
+    assert result.returncode == 0, result.stderr
+    assert "4 paired runs, 1 changed outcome" in result.stdout       # seed 2 of the flips 2 and 5
+
+
 def test_save_tables_writes_one_table_per_batch_present(spaced_tmp):
     make_pair_of_batches(str(spaced_tmp))
     saved = spaced_tmp / "saved"
@@ -466,10 +497,24 @@ def test_study_skips_tabled_batches_only_on_the_same_field(spaced_tmp, agglo):
     assert f"batch disk-base: from its run table {tables}/disk-base.csv (2 runs), not run" in result.stdout
     submit = (out / "submit-all.sh").read_text()
     assert "disk-perturbed/montecarlo.sbatch" in submit and "disk-base" not in submit
-    # Three runs asked for: the 2-run table no longer stands for the batch.
+    # Three runs asked for: the 2-run table no longer stands for the batch; the batch continues
+    # after its two tabled runs (run 3 alone in the array) and keeps them as earlier_runs.csv.
     result = run_tool(command[:3] + ["-N", "3"] + command[5:], cwd=work)
     assert result.returncode == 0, result.stderr + result.stdout
     assert "disk-base/montecarlo.sbatch" in (out / "submit-all.sh").read_text()
+    assert f"batch disk-base: runs 1-2 from its run table {tables}/disk-base.csv, runs 3-3 here" in result.stdout
+    assert "#SBATCH --array=3\n" in (out / "disk-base" / "montecarlo.sbatch").read_text()
+    assert (out / "disk-base" / "earlier_runs.csv").read_text() == (tables / "disk-base.csv").read_text()
+    # A table that is not runs 1..M of the batch (run 2 missing) does not continue it.
+    gapped = spaced_tmp / "gapped-tables"
+    shutil.copytree(tables, gapped)
+    (gapped / "disk-base.csv").write_text(",".join(RUN_TABLE_COLUMNS) + "\n" + "run_0001,1001\nrun_0003,1003\n")
+    result = run_tool(command[:3] + ["-N", "3"] + command[5:9] + ["--tables", gapped, "--slurm", "-o",
+                                                                   spaced_tmp / "gapped"], cwd=work)
+    assert result.returncode == 0, result.stderr + result.stdout
+    assert "runs 1-2 from its run table" not in result.stdout
+    assert "#SBATCH --array=1-3" in (spaced_tmp / "gapped" / "disk-base" / "montecarlo.sbatch").read_text()
+    assert not (spaced_tmp / "gapped" / "disk-base" / "earlier_runs.csv").exists()
     # Runs from another base seed, or of another deck, do not stand for the batch either.
     result = run_tool(command + ["-o", spaced_tmp / "seed", "--seed", "2001"], cwd=work)
     assert result.returncode == 0, result.stderr + result.stdout
