@@ -3,8 +3,10 @@
 For each batch root below STUDY (a directory with batch.conf, tools/montecarlo.sh), reads the
 summary.json of its complete runs and writes one row: the batch, complete and failed runs, and the
 sum, median and maximum of the runs' wall times (s, the code's own measure, summary.json
-wall_time) with the median simulated time (ms) and wall seconds per simulated millisecond. Works
-for local and Slurm batches alike (batch_times.tsv only sees local calls).
+wall_time) with the median simulated time (ms) and wall seconds per simulated millisecond. A batch
+continued from its run table (its runs of an earlier session in ROOT/earlier_runs.csv,
+tools/study_compare.py) counts those rows as well. Works for local and Slurm batches alike
+(batch_times.tsv only sees local calls).
 
 Usage: .venv/bin/python tools/batch_costs.py STUDY [-o FILE.tsv]
 """
@@ -13,6 +15,10 @@ import json
 import os
 import statistics
 import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from agglo_stats import BatchError  # noqa: E402
+from study_compare import EARLIER_RUNS, read_run_table  # noqa: E402
 
 COLUMNS = ("batch", "complete", "failed", "wall_sum_s", "wall_median_s", "wall_max_s",
            "simulated_median_ms", "wall_per_simulated_ms_median_s")
@@ -32,7 +38,7 @@ def batch_roots(study):
 
 def batch_cost(root):
     """The COLUMNS row of one batch root (numbers empty without a complete run)."""
-    walls, simulated, per_ms, failed = [], [], [], 0
+    runs, walls, simulated, per_ms, failed, complete = [], [], [], [], 0, set()
     for entry in sorted(os.listdir(root)):
         run = os.path.join(root, entry)
         if not (entry.startswith("run_") and os.path.isdir(run)):
@@ -45,7 +51,13 @@ def batch_cost(root):
                 summary = json.load(handle)
         except (OSError, ValueError):
             continue
-        wall, end = float(summary["wall_time"]), float(summary["end_time"])
+        complete.add(entry)
+        runs.append((float(summary["wall_time"]), float(summary["end_time"])))
+    if os.path.isfile(os.path.join(root, EARLIER_RUNS)):
+        runs += [(values["wall_time"], values["end_time"])
+                 for name, (_seed, values) in read_run_table(os.path.join(root, EARLIER_RUNS)).items()
+                 if name not in complete]
+    for wall, end in runs:
         walls.append(wall)
         simulated.append(end * 1e3)
         if end > 0.0:
@@ -67,7 +79,11 @@ def main(argv=None):
     if not os.path.isdir(arguments.study):
         print(f"batch_costs: '{arguments.study}' is not a directory", file=sys.stderr)
         return 1
-    rows = [batch_cost(root) for root in batch_roots(arguments.study)]
+    try:
+        rows = [batch_cost(root) for root in batch_roots(arguments.study)]
+    except BatchError as error:
+        print(f"batch_costs: {error}", file=sys.stderr)
+        return 1
     lines = ["\t".join(COLUMNS)] + ["\t".join(str(row.get(c, "")) for c in COLUMNS) for row in rows]
     if arguments.out:
         with open(arguments.out + ".tmp", "w") as handle:

@@ -386,7 +386,9 @@ study_costs() {
 }
 
 # study_publish_results: the analysis' figures and small tables into docs/figures/<study>/, with
-# the study's output root removed from the paths inside (no machine paths in the repository).
+# the study's output root removed from the paths inside (no machine paths in the repository). The
+# two cost tables keep what earlier sessions published there (their output roots are gone):
+# batch_times.tsv gains the rows it lacks, batch_costs.tsv's rows are replaced batch by batch.
 study_publish_results() {
   local target="${AGGLO_STUDY_PUBLISH_DIR:-$study_repo/docs/figures/$study_name}" file name directory
   mkdir -p "$target" || { study_status_all=1; return; }
@@ -398,10 +400,29 @@ study_publish_results() {
     [ "$(dirname "$file")" = "$study_out" ] || name="${directory}_$name"
     case "$name" in
       *.png) cp "$file" "$target/$name" ;;
-      *) sed -e "s|$(cd "$study_out" && pwd -P)/||g" -e "s|$study_out/||g" "$file" > "$target/$name" ;;
+      batch_times.tsv|batch_costs.tsv)
+        study_strip_root "$file" > "$target/$name.new" && study_merge_table "$name" "$target/$name" "$target/$name.new" \
+          && mv -f "$target/$name.new" "$target/$name" || study_status_all=1 ;;
+      *) study_strip_root "$file" > "$target/$name" ;;
     esac
   done
   echo "published the figures and tables into $target"
+}
+
+study_strip_root() { sed -e "s|$(cd "$study_out" && pwd -P)/||g" -e "s|$study_out/||g" "$1"; }
+
+# study_merge_table NAME PUBLISHED NEW: NEW (rewritten in place) with the rows of the PUBLISHED table it
+# lacks: batch_times.tsv keeps every published row and appends the new ones it does not hold yet;
+# batch_costs.tsv keeps the published batches that NEW has no row for, all sorted by batch.
+study_merge_table() {
+  [ -f "$2" ] || return 0
+  if [ "$1" = batch_times.tsv ]; then
+    awk '!seen[$0]++' "$2" "$3" > "$3.tmp"
+  else
+    { head -n 1 "$3"
+      awk -F '\t' 'FNR == 1 { next } NR == FNR { row[$1] = $0; next } { row[$1] = $0 }
+                   END { for (batch in row) print row[batch] }' "$2" "$3" | LC_ALL=C sort -t $'\t' -k 1,1; } > "$3.tmp"
+  fi && mv -f "$3.tmp" "$3"
 }
 
 study_finish() {

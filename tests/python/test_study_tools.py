@@ -290,6 +290,7 @@ def test_a_batch_continued_from_its_run_table_counts_both(spaced_tmp):
     assert run_tool([PYTHON, REPO / "tools" / "speed_accuracy.py", study / "manifest.tsv", "-o", whole,
                      "--no-figures", "--save-tables", whole / "tables"]).returncode == 0
     table = read_csv(whole / "tables" / "disk-cheap.csv")
+    assert run_tool([PYTHON, REPO / "tools" / "batch_costs.py", study, "-o", whole / "costs.tsv"]).returncode == 0
     with open(study / "disk-cheap" / "earlier_runs.csv", "w", newline="") as handle:
         writer = csv.DictWriter(handle, fieldnames=list(table[0]), lineterminator="\n")
         writer.writeheader()
@@ -302,6 +303,8 @@ def test_a_batch_continued_from_its_run_table_counts_both(spaced_tmp):
     assert result.returncode == 0, result.stderr
     assert read_csv(continued / "comparison.csv") == read_csv(whole / "comparison.csv")
     assert read_csv(continued / "tables" / "disk-cheap.csv") == table
+    assert run_tool([PYTHON, REPO / "tools" / "batch_costs.py", study, "-o", continued / "costs.tsv"]).returncode == 0
+    assert read_csv(continued / "costs.tsv", "\t") == read_csv(whole / "costs.tsv", "\t")     # 8 runs each
     # Runs 5-8 not complete (FAILED): the batch is its four earlier runs, seeds 1-4.
     for seed in range(5, 9):
         (study / "disk-cheap" / f"run_{seed:04d}" / "FAILED").write_text("reason: test\n")
@@ -562,6 +565,15 @@ def test_study_runs_resumes_and_records_costs(spaced_tmp, agglo, monkeypatch):
     monkeypatch.setenv("AGGLO_STUDY_PUBLISH_DIR", str(published))
     command = [REPO / "tools" / "quiescent-resolved-study.sh", "-o", out, "--only", "^needle-none$",
                "--cheap-runs", "2", "-j", "2"]
+    # What an earlier session (another output root, gone) published: kept, the batch's row replaced.
+    published.mkdir()
+    costs_header = "batch\tcomplete\tfailed\twall_sum_s\twall_median_s\twall_max_s\tsimulated_median_ms\t" \
+                   "wall_per_simulated_ms_median_s\n"
+    (published / "batch_costs.tsv").write_text(costs_header + "disk-old\t3\t0\t9.0\t3\t3\t3\t1\n"
+                                               + "needle-none\t1\t0\t1.0\t1\t1\t3\t0.3\n")
+    old_time = "disk-old\t3\t1\t3\t9.5\t0\t2026-01-01T00:00:00+00:00\n"
+    (published / "batch_times.tsv").write_text("batch\truns\tjobs\truns_run_by_this_call\twall_seconds\tstatus\t"
+                                               "date\n" + old_time)
     first = run_tool(command + ["--publish"], cwd=REPO)
     assert first.returncode == 0, first.stderr + first.stdout
     second = run_tool(command, cwd=REPO)
@@ -580,6 +592,10 @@ def test_study_runs_resumes_and_records_costs(spaced_tmp, agglo, monkeypatch):
     # --publish: the tables without the output root in their paths, no runs.csv.
     costs_published = (published / "batch_costs.tsv").read_text()
     assert "needle-none\t2\t" in costs_published and str(out) not in costs_published
+    assert [line.split("\t")[0] for line in costs_published.splitlines()] == ["batch", "disk-old", "needle-none"]
+    times_published = (published / "batch_times.tsv").read_text().splitlines()
+    assert times_published[1] == old_time.strip() and times_published[2].startswith("needle-none\t2\t")
+    assert len(times_published) == 3
     assert (published / "stats-all_rates.csv").exists()
     assert not list(published.glob("*runs.csv"))
 
