@@ -172,7 +172,7 @@ variant() {
         echo "batch $shape-$name: from its run table $table ($count runs), not run"
         continue
       fi
-      if (( tabled < count )) && { [ ! -d "$root" ] || [ -f "$root/earlier_runs.csv" ]; } && table_is_prefix "$table"; then
+      if (( tabled >= 1 && tabled < count )) && { [ ! -d "$root" ] || [ -f "$root/earlier_runs.csv" ]; } && table_is_prefix "$table"; then
         # Fewer runs: the batch continues after them (study_batch, study_earlier_table).
         echo "batch $shape-$name: runs 1-$tabled from its run table $table, runs $((tabled + 1))-$count here"
         study_earlier_table=$table
