@@ -65,9 +65,10 @@ batch whose table there has its N runs from the base seed S, and whose base deck
 call would run, is not run again; the analysis reads it where the batch root is absent. A table
 with fewer runs (runs 1..M of a session that ended) continues its batch: only runs M+1..N run here
 (montecarlo.sh --from-run), the table is kept in the root as earlier_runs.csv, and the analysis
-and --publish take the batch as those rows and the runs here. The tables are used only when this machine's base field has the same fingerprint (the same flow to the
-bit) for the batches that start from it; otherwise those batches run here (it says so), and
---no-tables computes every batch afresh.
+and --publish take the batch as those rows and the runs here. The tables are used only when this
+machine's base field has the same fingerprint (the same flow to the bit) for the batches that
+start from it; otherwise those batches run here (it says so), and --no-tables computes every
+batch afresh.
       --tables DIR       the run tables' folder (default docs/figures/speed-accuracy-study/runs)
       --no-tables        neither read nor skip by run tables
 With --publish the analysis' run tables of the batches run here are copied into TABLES as well.
@@ -172,7 +173,8 @@ variant() {
         echo "batch $shape-$name: from its run table $table ($count runs), not run"
         continue
       fi
-      if (( tabled >= 1 && tabled < count )) && { [ ! -d "$root" ] || [ -f "$root/earlier_runs.csv" ]; } && table_is_prefix "$table"; then
+      if (( tabled >= 1 && tabled < count )) && { [ ! -d "$root" ] || [ -f "$root/earlier_runs.csv" ]; } \
+         && table_is_prefix "$table"; then
         # Fewer runs: the batch continues after them (study_batch, study_earlier_table).
         echo "batch $shape-$name: runs 1-$tabled from its run table $table, runs $((tabled + 1))-$count here"
         study_earlier_table=$table
