@@ -173,8 +173,8 @@ variant() {
         echo "batch $shape-$name: from its run table $table ($count runs), not run"
         continue
       fi
-      if (( tabled >= 1 && tabled < count )) && { [ ! -d "$root" ] || [ -f "$root/earlier_runs.csv" ]; } \
-         && table_is_prefix "$table"; then
+      if (( tabled >= 1 && tabled < count )) && table_is_prefix "$table" \
+         && { [ -f "$root/earlier_runs.csv" ] || root_has_no_run_up_to "$root" "$tabled"; }; then
         # Fewer runs: the batch continues after them (study_batch, study_earlier_table).
         echo "batch $shape-$name: runs 1-$tabled from its run table $table, runs $((tabled + 1))-$count here"
         study_earlier_table=$table
@@ -189,6 +189,16 @@ variant() {
 table_is_prefix() {
   awk -F, -v seed="$study_seed" 'NR > 1 && ($1 != sprintf("run_%04d", NR - 1) || $2 != seed + NR - 2) { bad = 1 }
                                  END { exit bad }' "$1"
+}
+# root_has_no_run_up_to ROOT M: whether ROOT (a batch root, or nothing yet) holds none of the runs
+# 1..M, complete or not: a root that a continued call started (and was stopped before it wrote
+# earlier_runs.csv) then continues, while a batch begun here from run 1 does not.
+root_has_no_run_up_to() {
+  local i
+  for ((i = 1; i <= $2; i++)); do
+    [ -e "$1/$(printf 'run_%04d' "$i")" ] || [ -e "$1/$(printf '.run_%04d.partial' "$i")" ] && return 1
+  done
+  return 0
 }
 resolved=input/chaotic_SHAPE_resolved.nml
 # Every grid variant starts from the base decks' converged field (output/hit_box_128/final_field.h5)

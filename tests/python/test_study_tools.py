@@ -508,6 +508,19 @@ def test_study_skips_tabled_batches_only_on_the_same_field(spaced_tmp, agglo):
     assert f"batch disk-base: runs 1-2 from its run table {tables}/disk-base.csv, runs 3-3 here" in result.stdout
     assert "#SBATCH --array=3\n" in (out / "disk-base" / "montecarlo.sbatch").read_text()
     assert (out / "disk-base" / "earlier_runs.csv").read_text() == (tables / "disk-base.csv").read_text()
+    # A continued call stopped before it kept the table (its root holds none of runs 1-2) continues
+    # when called again; a root that holds one of runs 1-2 was begun here from run 1 and does not.
+    (out / "disk-base" / "earlier_runs.csv").unlink()
+    result = run_tool(command[:3] + ["-N", "3"] + command[5:], cwd=work)
+    assert result.returncode == 0, result.stderr + result.stdout
+    assert "runs 3-3 here" in result.stdout
+    assert "#SBATCH --array=3\n" in (out / "disk-base" / "montecarlo.sbatch").read_text()
+    assert (out / "disk-base" / "earlier_runs.csv").read_text() == (tables / "disk-base.csv").read_text()
+    (out / "disk-base" / "earlier_runs.csv").unlink()
+    (out / "disk-base" / "run_0002").mkdir()
+    result = run_tool(command[:3] + ["-N", "3"] + command[5:], cwd=work)
+    assert "runs 3-3 here" not in result.stdout
+    assert not (out / "disk-base" / "earlier_runs.csv").exists()
     # A table that is not runs 1..M of the batch (run 2 missing) does not continue it.
     gapped = spaced_tmp / "gapped-tables"
     shutil.copytree(tables, gapped)
