@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# chaotic-study.sh: the chaotic pair study (issue 12 section 1, docs/results-chaotic.md).
+# chaotic-study.sh: the chaotic pair study (docs/studies/results-chaotic.md).
 # `--help` says what it runs.
 set -u -o pipefail
 study_name=chaotic-study

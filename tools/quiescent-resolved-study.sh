@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# quiescent-resolved-study.sh: the quiescent pair study at resolved fidelity (issue 12 section 2,
-# docs/results-quiescent.md). `--help` says what it runs.
+# quiescent-resolved-study.sh: the quiescent pair study at resolved fidelity (docs/studies/results-quiescent.md).
+# `--help` says what it runs.
 set -u -o pipefail
 study_name=quiescent-resolved-study
 

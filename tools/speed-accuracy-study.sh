@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# speed-accuracy-study.sh: the measured speed-accuracy trade (issue 12 section 3,
-# docs/speed-accuracy.md). `--help` says what it runs.
+# speed-accuracy-study.sh: the measured speed-accuracy trade (docs/studies/speed-accuracy.md).
+# `--help` says what it runs.
 set -u -o pipefail
 study_name=speed-accuracy-study
 

@@ -9,7 +9,7 @@
 !> point and the stencil, weights and kappa of immersed_geometry (pure mirror, kappa = 1, for the
 !> implicit coupling; the 1.5-cell image point, kappa <= 1, for the explicit one). The ghost rows'
 !> stencils may hold fluid nodes, so the whole system is solved at once: replacing the rows of an
-!> FFT Crank-Nicolson solution afterwards would not reach this fixed point (issue 10).
+!> FFT Crank-Nicolson solution afterwards would not reach this fixed point.
 !>
 !> The system is non-symmetric (the ghost rows); it is solved per component with a hypre Krylov
 !> method (hypre_solver), by default BiCGSTAB preconditioned by the FFT Helmholtz solve with a

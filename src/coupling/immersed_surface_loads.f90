@@ -1,9 +1,9 @@
 !> Hydrodynamic loads on the immersed bodies by the paper's face sum (`&bodies load_method =
-!> 'surface'`; Mark & van Wachem 2008, anderson2025-methods Eqs. 8-10; docs/theory.md, "Surface
+!> 'surface'`; Mark & van Wachem 2008; Anderson et al. 2025 Eqs. 8-10; docs/theory.md, "Surface
 !> loads (face sum)"): F = sum_f (-p_f n_f + tau_f . n_f) A_f, T = sum_f r_f x (...) A_f, over the
 !> faces of the body's icosphere (icosphere_mesh, 20 4^level faces; 320 the paper's).
 !>
-!> Quadrature (ibm-notes sections 4 and 8.2): face f of the icosphere is the flat triangle of the
+!> Quadrature (docs/theory.md, "Surface loads (face sum)"): face f of the icosphere is the flat triangle of the
 !> affine image (a, b, b) of a unit-sphere triangle. Its point is the image of the unit-sphere
 !> centroid direction, a point on the spheroid (the centroid projected to the surface along the
 !> affine map); its normal the analytic one there; its weight the area of the spheroid patch over
@@ -15,7 +15,7 @@
 !> Surface values from two probes along the normal, at P_k = B + k h n, h = probe_cells dx
 !> (trilinear interpolation on each field's own grid, field_interpolation):
 !> - pressure extrapolated linearly, p_B = 2 p_1 - p_2 (never dp/dn = 0, which misses the wall-normal
-!>   pressure gradient mu lap(u).n and gave -9 to -11% in the prototype, ibm-notes section 4); the
+!>   pressure gradient mu lap(u).n, Mark & van Wachem 2008); the
 !>   pressure probes use only the cells whose centre is outside every body (trilinear weights
 !>   renormalised over them): the pressure inside a body has no meaning, and with the incremental
 !>   scheme it drifts step after step at steady state (the re-imposition's cut-cell divergence is

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# The resolved pair scene at its extremes (&scene particle_coupling = 'resolved'; issue 11,
-# validation 6; issue 12, section 4; docs/validation.md, "Extremes"), with $AGGLO on short runs of
+# The resolved pair scene at its extremes (&scene particle_coupling = 'resolved';
+# docs/studies/validation.md, "Extremes"), with $AGGLO on short runs of
 # one base deck (a sphere pair, r = 40 um, 32^3 in a 0.25 mm box, D/dx = 10.2, fluid at rest,
 # 2 um apart, 4.2 mm/s closing, DLVO and collisions on) changed by --set. Each case either
 #  - runs: exit 0, summary.json written, no NaN or infinity in particles.h5 and in

@@ -9,7 +9,7 @@
 !> 0.5% and with Zick & Homsy to 1%. The gravity path of module resolved_hydrodynamics: the net
 !> weight on the sphere and the opposite drive -W / L^3 over the box; the added-mass stabilisation on.
 !> Also: the potential-flow added masses the stabilisation uses (sphere k = 1/2; the face-on disk of
-!> aspect ratio 5 at the calcite density ratio, added mass / mass = 1.11, ibm-notes section 6) and
+!> aspect ratio 5 at the calcite density ratio, added mass / mass = 1.11, Kim & Karrila 1991 ch. 7) and
 !> the rotational added inertia (zero for a sphere; for the disk about a diameter a fraction of the
 !> disk's own inertia, below 1 at the calcite ratio: the rotation stays explicitly stable).
 program test_free_settling

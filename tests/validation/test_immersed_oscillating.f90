@@ -1,4 +1,4 @@
-!> The oscillating sphere (ibm notes section 8.5, rung 8; docs/validation.md, "Moving bodies"):
+!> The oscillating sphere (validation ladder rung 8; docs/validation.md):
 !> - the reference: Stokes' (1851) complex force equals the real form of Landau & Lifshitz, Fluid
 !>   Mechanics, section 24, problem 5, F = -[6 pi mu R (1 + R/delta) U + 3 pi R^2 sqrt(2 mu rho / omega)
 !>   (1 + 2 R / (9 delta)) dU/dt], and its box correction vanishes for an unbounded box;

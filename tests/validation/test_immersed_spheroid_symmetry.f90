@@ -1,5 +1,5 @@
-!> Symmetry of the immersed boundary with spheroids (the validation ladder, rung 6; ibm-notes
-!> section 8.5): a needle and a disk with their axes along the drive (aspect 5, 4.4 cells thin,
+!> Symmetry of the immersed boundary with spheroids (the validation ladder, rung 6;
+!> docs/validation.md): a needle and a disk with their axes along the drive (aspect 5, 4.4 cells thin,
 !> sphere_array_case on 32^3), each centred on a grid symmetry point (a corner of
 !> cell faces, where the MAC grid is mirror-symmetric in all three axes), develop no torque: it must
 !> stay below 1e-9 F r over 300 steps of the driven flow (F = f L^3, r the volume-equivalent radius),

@@ -1,5 +1,5 @@
-!> The squeeze film resolved by the immersed boundary (ibm notes section 8.5, rung 11; issue 11,
-!> validation item 5; docs/validation.md, "Lubrication"), the fast subset: two spheres of D/dx = 8 in a
+!> The squeeze film resolved by the immersed boundary (validation ladder rung 11;
+!> docs/studies/validation.md, "Lubrication"), the fast subset: two spheres of D/dx = 8 in a
 !> 48 x 24 x 24 box approaching each other at fixed speed, the gap held fixed, steady Stokes flow
 !> (src/driver/squeeze_case.f90). Reference: Brenner's (1961, Chem. Eng. Sci. 16, 242) exact force of
 !> the pair in unbounded fluid, F_B = 6 pi mu a U beta(h/a); the series itself is checked against its

@@ -1,8 +1,8 @@
 !> The face-sum loads and the mesh geometry on the steady simple-cubic sphere array (phi = 0.125,
-!> D/dx = 8.06, 13^3; ibm-notes section 8.5 rungs 4 and 5; the full measurement at D/dx = 8-16 is
+!> D/dx = 8.06, 13^3; docs/validation.md rungs 4 and 5; the full measurement at D/dx = 8-16 is
 !> `make validate`, tools/bench/bench_immersed_surface.f90, docs/validation.md):
 !> - face sum (320 faces) against the momentum-balance load: within 10% at D/dx = 8 (measured
-!>   -8.5%; the prototype's face sum erred by -5 to -10% at this resolution, ibm notes section 5.7;
+!>   -8.5%; the face sum's own discretisation error at this resolution;
 !>   rung 5's 5% bound applies at D/dx = 16, where `make validate` measures -1.7%); its lateral
 !>   components below 1% of the drive (measured 0.65%); and it does not drift once the flow is
 !>   steady: 757 further steps change it by less than 1e-6 (measured 1e-7; a probe that read the

@@ -1,5 +1,5 @@
 !> Free pair approaching head-on (make validate; docs/validation.md, "Lubrication", "Free pair
-!> approach"; issue 11, validation item 5): two spheres resolved by the immersed boundary
+!> approach"): two spheres resolved by the immersed boundary
 !> (&scene particle_coupling = 'resolved') pushed together from rest by constant opposite forces in
 !> fluid at rest (src/driver/squeeze_case.f90, run_free_squeeze), without and with the sub-grid
 !> lubrication of the particle system at the given hand-over gaps. Per run, a Markdown table at the

@@ -560,7 +560,7 @@ contains
   !> spheroid-symmetry[:thin cells[:shape]] (default the paper's thin dimension: needle 15, disk 8.8
   !> cells), in a tight box: the torque vanishes by symmetry in any periodic lattice of the body, so
   !> the box only has to hold it (2 nint(half extent) + 8 cells along each axis). Explicit diffusion,
-  !> Aitken stop as in the ladder. Bound: 1e-3 F r (ibm notes, rung 6).
+  !> Aitken stop as in the ladder. Bound: 1e-3 F r (rung 6, docs/validation.md).
   subroutine spheroid_symmetry(spec)
     character(len=*), intent(in) :: spec
     character(len=8), parameter :: shapes(2) = [character(len=8) :: 'needle', 'disk']

@@ -1,6 +1,6 @@
 !> The immersed boundary's surface loads and mesh geometry (make validate; docs/validation.md,
 !> "Surface loads and mesh geometry"):
-!> 1. rung 5 of the ibm notes' ladder: the face-sum load (load_method = 'surface', icosphere of 80,
+!> 1. rung 5 of the validation ladder: the face-sum load (load_method = 'surface', icosphere of 80,
 !>    320 and 1280 faces) against the momentum-balance load on the steady simple-cubic sphere array
 !>    at phi = 0.125, D/dx about 8, 12 and 16 (bound: 5% at D/dx = 16), and the same for the torque
 !>    of a rotating sphere (L/D = 2, no drive, 320 faces) at D/dx = 8, 12 and 16;
