@@ -32,7 +32,7 @@ OBJ := $(BUILD)/obj
 MOD := $(BUILD)/mod
 # The fluid stencils (momentum_terms) are arithmetic-bound, not memory-bound: where the CPU has
 # AVX-512 (in the ARCH the build targets), 512-bit vectors (GCC prefers 256-bit by default) make the predictor sweep about 1.6x
-# faster at 128^3 (docs/performance.md, Fluid). Same arithmetic per point, so the same results.
+# faster at 128^3 (docs/studies/performance.md, Fluid). Same arithmetic per point, so the same results.
 ifeq ($(MODE),release)
   ifneq ($(shell $(FC) -march=$(ARCH) -Q --help=target 2>/dev/null | grep -E '^[[:space:]]+-mavx512f[[:space:]]+\[enabled\]'),)
     STENCIL_FLAGS := -mprefer-vector-width=512

@@ -5,7 +5,7 @@
 # the coupled step with immersed bodies against the fluid-only step, by part and against the number
 # of bodies (BENCH_PARTS=immersed).
 # Medians over repetitions (the machine may be shared: compare ratios; poisson = the in-buffer solve
-# the step uses, pois(copy) = the poisson_solve API with its copies in and out). Results: docs/performance.md.
+# the step uses, pois(copy) = the poisson_solve API with its copies in and out). Results: docs/studies/performance.md.
 set -eu
 cd "$(dirname "$0")/.."
 BUILD=${BUILD:-build}
@@ -37,7 +37,7 @@ fi
 
 # The staged step (fluid_predict, fluid_project, fluid_finish_step) against the fused one, each stage
 # in ns per grid point next to the bytes it moves and the floor set by the memory bandwidth (a
-# STREAM-like triad on the same ranks). Minima over the repetitions (docs/performance.md).
+# STREAM-like triad on the same ranks). Minima over the repetitions (docs/studies/performance.md).
 if [[ $parts == *stages* ]]; then
   echo
   echo "Staged step and the roofline:"
@@ -50,7 +50,7 @@ if [[ $parts == *stages* ]]; then
 fi
 
 # Eswaran-Pope forcing per step against a whole Crank-Nicolson fluid step (input/hit_box.nml);
-# target <= 10% (docs/performance.md). Means over 20 (64^3) or 5 (128^3) repetitions, slowest rank.
+# target <= 10% (docs/studies/performance.md). Means over 20 (64^3) or 5 (128^3) repetitions, slowest rank.
 if [[ $parts == *forcing* ]]; then
   echo
   echo "Forcing:    N  R  forcing_ms   step_ms  percent"
@@ -63,7 +63,7 @@ fi
 
 # Immersed bodies in prescribed motion (the paper's needle and disk, moving and rotating: reclassified
 # every step; explicit diffusion): the coupled step against the fluid-only step (target <= 1.3x,
-# docs/performance.md), by part, for both couplings, 1 and 2 ranks; then against the number of
+# docs/studies/performance.md), by part, for both couplings, 1 and 2 ranks; then against the number of
 # bodies and against the mesh level of the ghost-node geometry. Medians over 10 (128^3) or 20 (64^3) repetitions, slowest rank; on 1 rank the process's
 # CPU time (robust on a shared machine), on 2 ranks the wall time.
 if [[ $parts == *immersed* ]]; then

@@ -9,7 +9,7 @@ study_usage_specific() {
 Usage: tools/quiescent-resolved-study.sh [options]
 
 The paper's quiescent pair protocol for needles and disks at resolved fidelity, on the seeds of
-the cheap-fidelity study (docs/results-quiescent.md: seeds 1001...), compared run by run with the
+the cheap-fidelity study (docs/studies/results-quiescent.md: seeds 1001...), compared run by run with the
 'none' scene. Run from the repository root after `make build tools-deps`.
 
   1. batches (tools/montecarlo.sh), seeds S..S+N-1 in every batch:

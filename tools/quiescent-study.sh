@@ -1,13 +1,13 @@
 #!/usr/bin/env bash
-# quiescent-study.sh: reproduces the quiescent pair study of docs/results-quiescent.md.
-# `tools/quiescent-study.sh --help` says what it runs; docs/results-quiescent.md discusses the results.
+# quiescent-study.sh: reproduces the quiescent pair study of docs/studies/results-quiescent.md.
+# `tools/quiescent-study.sh --help` says what it runs; docs/studies/results-quiescent.md discusses the results.
 set -u -o pipefail
 
 usage() {
   cat <<'EOF'
 Usage: tools/quiescent-study.sh [options]
 
-Reproduces docs/results-quiescent.md: the paper's quiescent pair protocol (decks
+Reproduces docs/studies/results-quiescent.md: the paper's quiescent pair protocol (decks
 input/quiescent_{needle,disk,sphere}_{none,stokes}.nml) as six Monte-Carlo batches, then the
 statistics and figures, then the sensitivity batches of physics.md section 7. Run it from the
 repository root after `make build tools-deps`.

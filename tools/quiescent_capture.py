@@ -5,7 +5,7 @@ the last particles.h5 sample before the first collision (orientations barely cha
 stats_interval before it), the normal approach speed before and the rebound speed after the
 first collision (summary.json), and the outcome. Figure `capture` (PNG and PDF in OUT):
 rebound speed against chi_eta per group, coloured by outcome, with the escape line of the
-head-on energy balance (docs/results-quiescent.md):
+head-on energy balance (docs/studies/results-quiescent.md):
 
     mu v_after^2 / 2 = chi_eta W_1   ->   v_escape(chi_eta) = sqrt(2 chi_eta W_1 / mu),
 

@@ -9,7 +9,7 @@ box and &forcing kappa_f_ratio alone, so it is the same on every grid; a snapsho
 A checkpoint's multistep history (explicit_old_*, dt_old, step, has_history) belongs to its grid
 and is not written: a run started from a file begins its history afresh anyway.
 
-Method (docs/speed-accuracy.md, "Why the grid variants share one field"):
+Method (docs/studies/speed-accuracy.md, "Why the grid variants share one field"):
 1. Each component is the trigonometric interpolant of its samples at its OWN staggered positions
    (src/fluid/fluid_grid.f90: u(i,j,k) at (i dx, (j-1/2) dy, (k-1/2) dz), v and w alike, the
    pressure at the cell centres), evaluated at the same kind of positions on the new grid: the

@@ -203,7 +203,7 @@ root_has_no_run_up_to() {
 resolved=input/chaotic_SHAPE_resolved.nml
 # Every grid variant starts from the base decks' converged field (output/hit_box_128/final_field.h5)
 # resampled onto its grid, so that the variants differ in the grid alone, not in the realisation of
-# the turbulence (docs/speed-accuracy.md, "Why the grid variants share one field").
+# the turbulence (docs/studies/speed-accuracy.md, "Why the grid variants share one field").
 read -r _ base_nx base_field <<< "$(study_deck_info "${resolved//SHAPE/${shape_list[0]}}")"
 [ -n "$base_field" ] || study_die "${resolved//SHAPE/${shape_list[0]}} starts from no &fluid init_file"
 regridded_field() { printf '%s_on_%s/final_field.h5' "$(dirname "$base_field")" "$1"; }

@@ -116,13 +116,13 @@ contains
   !> with the immersed boundary, with either viscous scheme (with Crank-Nicolson the predictor's
   !> system holds the body rows, docs/theory.md "Crank-Nicolson with free particles"); particles at
   !> least half as dense as the fluid (below, the added-mass stabilisation of a disk's rotation was
-  !> measured to ring with a growing amplitude, docs/validation.md "Free particles").
+  !> measured to ring with a growing amplitude, docs/studies/validation.md "Free particles").
   subroutine check_resolved_pair_cross(cfg)
     type(agglo_config_t), intent(in) :: cfg
     if (cfg%scene%particle_coupling == 'resolved' .and. cfg%pair%density < 0.5_wp * cfg%fluid%density) &
       call input_error('pair', 'density', real_text(cfg%pair%density), '>= 0.5 x &fluid density = '// &
                        real_text(0.5_wp * cfg%fluid%density)//' with &scene particle_coupling = ''resolved'' (lighter '// &
-                       'particles are not stable with the lagged loads, docs/validation.md "Free particles")')
+                       'particles are not stable with the lagged loads, docs/studies/validation.md "Free particles")')
   end subroutine check_resolved_pair_cross
 
   !> The pair in the resolved fluid's periodic box: body 2's minimum image must be the one next to body 1.

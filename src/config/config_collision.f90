@@ -33,7 +33,7 @@ module config_collision
 
 contains
 
-  !> The hand-over gap (cells) the squeeze calibration measured for the scene (docs/validation.md,
+  !> The hand-over gap (cells) the squeeze calibration measured for the scene (docs/studies/validation.md,
   !> "Lubrication"): where the resolved squeeze force of the immersed boundary stops following
   !> Brenner's (1961) exact force of two spheres. With resolved particles and the pressure-free
   !> projection (&fluid pressure_scheme = 'non_incremental', the decks') the resolved force falls

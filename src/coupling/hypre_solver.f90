@@ -215,7 +215,7 @@ contains
           size(solution), ' entries, this rank owns ', size(solver%rhs_local)
       call fatal(trim(text), collective=.false.)
     end if
-    ! Every hypre solve of the run under one timer (the step's breakdown, docs/performance.md).
+    ! Every hypre solve of the run under one timer (the step's breakdown, docs/studies/performance.md).
     call timer_tic('hypre')
     solver%rhs_local = rhs
     solver%solution_local = solution

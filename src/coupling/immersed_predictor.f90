@@ -14,7 +14,7 @@
 !> The system is non-symmetric (the ghost rows); it is solved per component with a hypre Krylov
 !> method (hypre_solver), by default BiCGSTAB preconditioned by the FFT Helmholtz solve with a
 !> Jacobi correction on the replaced rows (hypre_fft_preconditioner), chosen by measurement
-!> (docs/performance.md, "Crank-Nicolson with the immersed boundary"). The matrices are built
+!> (docs/studies/performance.md, "Crank-Nicolson with the immersed boundary"). The matrices are built
 !> when the nodes are classified again (bodies moved) and their values replaced when alpha
 !> changes (a new dt); the right-hand side every step.
 !>
@@ -82,7 +82,7 @@ module immersed_predictor
 
 contains
 
-  !> BiCGSTAB with the FFT Helmholtz preconditioner (the measured choice, docs/performance.md).
+  !> BiCGSTAB with the FFT Helmholtz preconditioner (the measured choice, docs/studies/performance.md).
   pure function default_predictor_config(tolerance, max_iterations) result(config)
     real(wp), intent(in) :: tolerance
     integer, intent(in) :: max_iterations
@@ -121,7 +121,7 @@ contains
   end subroutine immersed_predictor_reclassified
 
   !> The first guess of the next solve: u^n (near a steady state u* differs from u^n by far less
-  !> than from b, which lacks alpha L u*; measured in docs/performance.md). Without it the solve
+  !> than from b, which lacks alpha L u*; measured in docs/studies/performance.md). Without it the solve
   !> starts from b with the body rows' values.
   subroutine immersed_predictor_first_guess(predictor, grid, u, v, w)
     type(immersed_predictor_t), intent(inout) :: predictor

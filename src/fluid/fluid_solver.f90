@@ -12,7 +12,7 @@
 !> second-order AB2/CN scheme applied to the projected equations; u^{n+1} is solenoidal to round-off.
 !> Restartable history: E^{n-1}, dt_old and has_history (see fluid_solver_t).
 !>
-!> Memory traffic, not arithmetic, sets the cost of a step (docs/performance.md, Fluid), so the
+!> Memory traffic, not arithmetic, sets the cost of a step (docs/studies/performance.md, Fluid), so the
 !> step is organised in as few sweeps as possible, plane by plane (momentum_terms):
 !>   1. predictor sweep: E^n for u, v, w and u* in one pass; u* goes into the E^{n-1} arrays (no
 !>      copy), and with explicit diffusion div u* / dt goes straight into the FFT buffer one plane
@@ -37,7 +37,7 @@
 !> The resolved pair decks therefore keep the pressure-free default: stable there, with a splitting
 !> error that lowers the squeeze force near contact (it decreases with dt), which the sub-grid
 !> lubrication's larger hand-over for this scheme absorbs (config_collision,
-!> default_lubrication_handover; docs/validation.md, "Lubrication").
+!> default_lubrication_handover; docs/studies/validation.md, "Lubrication").
 !>
 !> The staged step (docs/design.md, the step's stages) is the same step cut where the immersed
 !> boundary must act; a driver calls, in this order,

@@ -11,7 +11,7 @@
 !>       + [ (w_{i,k}+w_{i+1,k})(u_{k}+u_{k+1}) - (w_{i,k-1}+w_{i+1,k-1})(u_{k-1}+u_{k}) ] / (4 dz)
 !> and the same by cyclic permutation for v and w.
 !>
-!> Performance layout (docs/performance.md, Fluid): the operators work one z plane at a time so the
+!> Performance layout (docs/studies/performance.md, Fluid): the operators work one z plane at a time so the
 !> solver can fuse them into few sweeps over memory and overlap halo messages with interior planes.
 !> predictor_plane computes all three components of -N(u) + nu L u and the AB2 predictor in one
 !> k-j-i pass (u, v, w read once instead of three times); divergence_plane writes div u* straight

@@ -168,7 +168,7 @@ contains
   !> The same solve in the solver's own buffer: on entry real_view(1:nx, 1:ny, 1:nz_local) holds
   !> the right-hand side, on exit the solution (normalised, zero mean). The fluid step writes the
   !> divergence straight into real_view and reads the potential straight out of it, so the solve
-  !> costs one FFT pair plus one pass over the half spectrum (target <= 1.3 FFT pairs, docs/performance.md, Fluid).
+  !> costs one FFT pair plus one pass over the half spectrum (target <= 1.3 FFT pairs, docs/studies/performance.md, Fluid).
   !> FFTW's 1/(nx ny nz) normalisation is folded into the spectral division (one multiply saved
   !> per grid point and no separate scaling pass).
   subroutine poisson_solve_in_buffer(solver)

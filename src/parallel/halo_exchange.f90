@@ -3,7 +3,7 @@
 !> The z planes are sent whole (with their x-y halo ring), so edge and corner halos are right too.
 !> Buffers are the slab's own preallocated planes: nothing is allocated here.
 !>
-!> Why more than one entry point (docs/performance.md, Fluid): each MPI message is a point where
+!> Why more than one entry point (docs/studies/performance.md, Fluid): each MPI message is a point where
 !> the two ranks wait for each other, which on a shared machine costs more than the bytes. So
 !> exchange_z_halos sends up to three fields (u, v, w) in ONE message per direction, both
 !> directions in flight at once, and start_plane_shift / finish_plane_shift move a single plane

@@ -1,5 +1,5 @@
 !> Unsteady Stokes drag of a sphere released with a velocity in fluid at rest: the reference of
-!> docs/validation.md, "Free particles" (the release decay; docs/theory.md, "A sphere released in
+!> docs/studies/validation.md, "Free particles" (the release decay; docs/theory.md, "A sphere released in
 !> fluid at rest"). The Basset-Boussinesq-Oseen equation in the form of Maxey & Riley (1983, Phys.
 !> Fluids 26, 883, no gravity, the fluid at rest far away), for t > 0:
 !>   (m + m_f/2) dU/dt = -6 pi mu a U - 6 a^2 sqrt(pi rho_f mu) [U(0+)/sqrt(t) + int_0^t (dU/dtau) / sqrt(t - tau) dtau],

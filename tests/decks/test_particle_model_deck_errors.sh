@@ -59,7 +59,7 @@ expect_deck_error lubrication_roughness_vs_handover 1 "$stokes
 &collision lubrication = .true., lubrication_roughness = 1.0e-4 /" \
   "&collision lubrication_roughness = 1.00000E-04 is not allowed; allowed: < the hand-over gap"
 # The default hand-over (lubrication_handover = 0) follows the resolved pair's pressure scheme
-# (config_collision, default_lubrication_handover; docs/validation.md, "The decks' pressure scheme"):
+# (config_collision, default_lubrication_handover; docs/studies/validation.md, "The decks' pressure scheme"):
 # 0.75 cell with the decks' 'non_incremental', 0.5 cell with 'incremental' (48 cells in 0.64 mm).
 extra_args=(--set collision.lubrication=.true. --set collision.lubrication_roughness=2e-5)
 expect_deck_file_error handover_default_non_incremental 1 "$resolved_needle" \

@@ -10,7 +10,7 @@
 #  - a restart continues bodies_loads.dat and particles.h5 bit for bit (rows after the checkpoint
 #    dropped);
 #  - a sphere crossing the periodic wrap in x and z (its centre wraps during the run) and, on 2
-#    ranks, the rank boundaries (rung 9 of docs/validation.md): its loads equal to round-off those of the same
+#    ranks, the rank boundaries (rung 9 of docs/studies/validation.md): its loads equal to round-off those of the same
 #    sphere 16 cells lower, which crosses no periodic boundary (the periodic grid is invariant under
 #    a shift by whole cells), and those of 2 ranks equal 1 rank's; the run logs its status changes
 #    and load jumps;

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The speed-accuracy knobs of the resolved pair scene (&scene particle_coupling = 'resolved'; issue
-# "the studies", section 3), each in a short free-pair run with $AGGLO (docs/validation.md,
+# "the studies", section 3), each in a short free-pair run with $AGGLO (docs/studies/validation.md,
 # "Crank-Nicolson with free particles" and "Knobs of the resolved pair scene"):
 #  - &fluid viscous_scheme = 'crank_nicolson' with free particles: a sphere pair in a forced box at
 #    5x the explicit-diffusion bound, 5 um apart; n fluid steps, then &run restart to 2n, equals 2n steps in one

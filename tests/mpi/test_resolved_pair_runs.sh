@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Free particles resolved by the immersed boundary (&scene particle_coupling = 'resolved'), with
-# $AGGLO on small decks (docs/validation.md, "Free particles"):
+# $AGGLO on small decks (docs/studies/validation.md, "Free particles"):
 #  - added mass: a calcite-shaped disk pair (aspect ratio 5) set moving face-on in fluid at rest,
 #    one progress line per fluid step. At the density ratio 0.5 the lagged loads without the
 #    stabilisation (&scene added_mass = .false.) flip the approach speed's sign every fluid step

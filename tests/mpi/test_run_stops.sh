@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Run-time stops of the resolved scene with $AGGLO (docs/validation.md, "Restart hygiene and run
+# Run-time stops of the resolved scene with $AGGLO (docs/studies/validation.md, "Restart hygiene and run
 # stops"): a NaN or a CFL above the limit stops the run with a message and a final field dump; 2 ranks:
 #  - CFL: a fixed dt with strong Eswaran-Pope forcing from rest; the flow accelerates until the
 #    advective CFL number dt (|u|/dx + |v|/dy + |w|/dz)_max passes &run cfl_limit = 1. The run must

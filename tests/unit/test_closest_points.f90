@@ -327,7 +327,7 @@ contains
     write(*, '(a,es10.3,a,es10.3,a,i0)') '  worst |gap - brute| / r = ', worst_error, ', worst certificate bound / r = ', &
       worst_bound, ', multi-start fallbacks ', n_fallback
     call check_equal(n_converged, n_pairs, 'random_pairs_all_converged')
-    ! Required (docs/validation.md, closest points): gap error <= 1e-9 r against brute force for >= 1000 random pairs.
+    ! Required (docs/studies/validation.md, closest points): gap error <= 1e-9 r against brute force for >= 1000 random pairs.
     call check_below(worst_error, 1.0e-9_wp, 'random_pairs_gap_vs_brute_force  '//trim(detail))
     call check_below(worst_consistency, 1.01e-12_wp, 'random_pairs_points_on_surfaces_and_aligned')
     ! The certified bracket [gap, gap + bound] of the true distance is tight.

@@ -1,4 +1,4 @@
-!> The imposition of immersed_boundary on fields it must leave unchanged (docs/validation.md,
+!> The imposition of immersed_boundary on fields it must leave unchanged (docs/studies/validation.md,
 !> rung 3: the mirror is exact for linear fields). A rigid-body field u = U + Omega x (x - X) over
 !> the whole box near a translating, rotating needle and a sphere (random orientation and sub-cell
 !> position, away from the periodic wrap so the field is linear over every stencil): trilinear

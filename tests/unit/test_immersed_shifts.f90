@@ -1,5 +1,5 @@
 !> Node counts of the immersed-boundary classification under sub-cell shifts (the validation ladder,
-!> rung 1; docs/validation.md): a needle and a disk of aspect 5 (volume-equivalent radius 0.1 mm
+!> rung 1; docs/studies/validation.md): a needle and a disk of aspect 5 (volume-equivalent radius 0.1 mm
 !> in a 1 mm box at 64^3: 4.4 and 7.5 cells thin), each at three fixed random orientations, moved by
 !> 16 random sub-cell shifts. Per orientation and component, the spread (largest minus smallest) of
 !> the ghost count and of the interior count, in surface layers of S/dx^2 nodes (S the spheroid's

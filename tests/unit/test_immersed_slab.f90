@@ -1,5 +1,5 @@
 !> A tilted plane wall through the ghost rows (the immersed-boundary validation ladder, rung 3;
-!> docs/validation.md): a linear shear profile u = gamma s(x) t, zero on the wall, s the signed
+!> docs/studies/validation.md): a linear shear profile u = gamma s(x) t, zero on the wall, s the signed
 !> distance to the wall and t a tangent, must come out of the imposition unchanged, because the
 !> pure mirror (u_G = 2 u_B - u_M, Mark & van Wachem 2008) and the image point at 1.5 cells are
 !> exact for a linear field vanishing on a plane and trilinear interpolation reproduces it.

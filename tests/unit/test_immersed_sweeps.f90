@@ -1,8 +1,8 @@
 !> Convergence of the implicit ghost rows (the immersed-boundary validation ladder, rung 2;
-!> docs/validation.md): needles and disks of aspect 5 (volume-equivalent radius 0.1 mm in a 1 mm box, the
+!> docs/studies/validation.md): needles and disks of aspect 5 (volume-equivalent radius 0.1 mm in a 1 mm box, the
 !> disk 4.4 cells thick) at 16 random orientations and positions each, with random rigid motion, at
 !> 64^3, starting from a smooth field: the Jacobi sweeps of the pure-mirror ghost rows reach 1e-12 of
-!> the velocity scale within 10 sweeps (the bound of docs/validation.md; measured 7 at most from
+!> the velocity scale within 10 sweeps (the bound of docs/studies/validation.md; measured 7 at most from
 !> 64^3 to 256^3, make validate). The 128^3 and 256^3 rows are in `make validate`.
 program test_immersed_sweeps
   use agglo_kinds, only: wp

@@ -89,7 +89,7 @@ program test_quaternion
     p = quaternion_advance(p, omega, dt)
     drift = max(drift, abs(quaternion_norm(p) - 1.0_wp))
   end do
-  ! Reference: 1e6 steps at the paper's dt (2e-7 s); docs/physics.md section 0, docs/validation.md: drift <= 1e-12.
+  ! Reference: 1e6 steps at the paper's dt (2e-7 s); docs/physics.md section 0, docs/studies/validation.md: drift <= 1e-12.
   call check_below(drift, 1.0e-12_wp, 'norm_drift_1e6_steps')
   r = quaternion_product(q, quaternion_from_axis_angle(omega, norm2(omega) * dt * n_steps))
   ! 1e6 steps of round-off (~1e-16 each, random walk ~1e-13, worst case linear 1e-10).

@@ -71,7 +71,7 @@ contains
   end subroutine report_values
 
   !> From rest, one step with a random non-solenoidal body force: u* = dt f is not solenoidal,
-  !> the projected u must be, to round-off: max |div u| <= 1e-12 U / dx (docs/validation.md, Fluid).
+  !> the projected u must be, to round-off: max |div u| <= 1e-12 U / dx (docs/studies/validation.md, Fluid).
   subroutine test_projection()
     type(fluid_solver_t) :: solver
     type(fluid_statistics_t) :: stats

@@ -5,7 +5,7 @@
 !>  - power balance: in the statistically stationary state the mean power input <f.u> equals the
 !>    mean dissipation nu <|grad u|^2> (docs/physics.md section 3: "check <f.u> against the measured
 !>    dissipation"; the discrete kinetic energy obeys dk/dt = <f.u> - epsilon, flow_statistics).
-!>    Tolerance 5% (docs/validation.md, Forcing). The averaging window is 0.6 s = 60 T_L after a 0.15 s transient
+!>    Tolerance 5% (docs/studies/validation.md, Forcing). The averaging window is 0.6 s = 60 T_L after a 0.15 s transient
 !>    (6 viscous times 1/(nu kappa0^2) = 0.025 s of the forced scale).
 !>    Printed for information: the energy change over the window (k_end - k_start)/W, which the
 !>    difference <P> - <epsilon> matches only up to O(dt) terms of the scheme (AB2 viscous terms, the

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# End-to-end forced runs of the resolved scene with $AGGLO (docs/validation.md, Forcing):
+# End-to-end forced runs of the resolved scene with $AGGLO (docs/studies/validation.md, Forcing):
 #  - restart with forcing: 2n steps in one run == n steps + restart + n steps, bit for bit
 #    (h5diff without tolerance on the whole final checkpoint: fluid/* and forcing/state), 2 ranks;
 #  - the time series of the restarted run (flow_statistics.h5: rows and spectra; fluid_statistics.dat)

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # A fresh forced run from a converged forced field (&fluid init = 'file'), with $AGGLO, 2 ranks
-# (docs/validation.md, Forcing, "Start from a converged forced field"; docs/theory.md):
+# (docs/studies/validation.md, Forcing, "Start from a converged forced field"; docs/theory.md):
 #  - spin-up: a 16^3 box of the hit_box deck (epsilon* = 1.6e-4 m^2/s^3, T_L = 0.01 s) forced from
 #    rest to t = 0.1 s (10 T_L; about 20 k/epsilon); its final_field.h5 holds forcing/state;
 #  - &forcing initial_state = 'field' (default): the OU coefficients of that file, so the power input

@@ -1,5 +1,5 @@
 !> A free sphere released at U_0 in fluid at rest, resolved by the immersed boundary
-!> (docs/validation.md, "Free particles", the release decay): its velocity against the unsteady
+!> (docs/studies/validation.md, "Free particles", the release decay): its velocity against the unsteady
 !> Stokes decay with added mass and Basset history (Maxey & Riley 1983, Phys. Fluids 26, 883;
 !> module unsteady_stokes), U(0+) = m U_0 / (m + m_f/2) from the impulsive pressure of the start.
 !> First the reference itself:
@@ -13,7 +13,7 @@
 !> its history estimate (&scene added_mass_history; docs/theory.md, "History with explicit
 !> diffusion"), the non-incremental pressure of the decks: over the whole first tau_p, the start
 !> included, |U_p - U_ref| / U_0 within 5% (the issue's tolerance; measured 1.1%, 6.9% without the
-!> history estimate and with the incremental pressure, docs/validation.md), the first step within 1%
+!> history estimate and with the incremental pressure, docs/studies/validation.md), the first step within 1%
 !> of the reference at t = dt (measured 0.4%: the sqrt(t) drop of the history is taken within the
 !> step), over [0.05 tau_p, tau_p] U_p / U_ref within 5% (measured 2.6%, at tau_p, nearly all the
 !> box's: 0.9% in 48^3), the distance travelled within 5% (1.4%), and the box's momentum (fluid

@@ -1,4 +1,4 @@
-!> Rotational added inertia of a free disk resolved by the immersed boundary (docs/validation.md,
+!> Rotational added inertia of a free disk resolved by the immersed boundary (docs/studies/validation.md,
 !> "Free particles"): a disk (aspect ratio 5) spun about a diameter in fluid at rest, no other load.
 !> Its potential-flow rotational added inertia about a diameter is 1.79 rho_f/rho_p of its own
 !> (Lamb 1932 sec. 373; resolved_hydrodynamics: rotational_added_inertia): at the density ratio
@@ -7,7 +7,7 @@
 !> the stabilisation, at the density ratios 0.5 and 1 (the light particles the deck accepts) and
 !> 2.72 (added inertia 0.66 of its own), it must stay below its start value over 30 fluid steps;
 !> at 2.72 without a sign change. (At 0.3 the stabilised spin rings with a slowly growing amplitude:
-!> the deck refuses density ratios below 0.5, docs/validation.md.)
+!> the deck refuses density ratios below 0.5, docs/studies/validation.md.)
 program test_free_rotation
   use agglo_kinds, only: wp
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite

@@ -1,11 +1,11 @@
-!> A free sphere settling in the periodic box, resolved by the immersed boundary (docs/validation.md,
+!> A free sphere settling in the periodic box, resolved by the immersed boundary (docs/studies/validation.md,
 !> "Free particles"): one sphere per cell is a simple-cubic array, so at steady state its slip
 !> velocity is the one at which the array's Stokes drag balances the net weight W:
 !>   W = 6 pi mu a K(phi) U_s,   U_s = U_p - U_face (the superficial velocity relative to the sphere,
 !> U_face the flux through the box's x-face over its area, a plane the sphere never cuts), with the
 !> Zick & Homsy (1982, J. Fluid Mech. 115, 13, Table 2) K = 4.292 at phi = 0.125. The same cell,
 !> D/dx = 8.06 (13^3), as the fixed-sphere array of test_immersed_stokes (K = 4.2794, -0.29%,
-!> docs/validation.md "Immersed boundary"): the free sphere's K must agree with the fixed array's to
+!> docs/studies/validation.md "Immersed boundary"): the free sphere's K must agree with the fixed array's to
 !> 0.5% and with Zick & Homsy to 1%. The gravity path of module resolved_hydrodynamics: the net
 !> weight on the sphere and the opposite drive -W / L^3 over the box; the added-mass stabilisation on.
 !> Also: the potential-flow added masses the stabilisation uses (sphere k = 1/2; the face-on disk of
@@ -23,7 +23,7 @@ program test_free_settling
   use test_framework, only: test_start, test_finish, check, check_close, check_below
   implicit none
   real(wp), parameter :: zick_homsy_0125 = 4.292_wp   ! Zick & Homsy 1982, Table 2, phi = 0.125
-  real(wp), parameter :: fixed_array_13 = 4.2794_wp   ! the fixed sphere at 13^3 (docs/validation.md)
+  real(wp), parameter :: fixed_array_13 = 4.2794_wp   ! the fixed sphere at 13^3 (docs/studies/validation.md)
   type(spheroid_t) :: shape, disk
   type(rigid_body_t) :: body
   type(settling_case_t) :: case

@@ -1,4 +1,4 @@
-!> Crank-Nicolson + hypre with a free particle (docs/validation.md, "Crank-Nicolson with free
+!> Crank-Nicolson + hypre with a free particle (docs/studies/validation.md, "Crank-Nicolson with free
 !> particles"): the settling sphere of test_free_settling (module settling_sphere_case, 13^3,
 !> D/dx 8.06, phi = 0.125, calcite density ratio 2.72) with &fluid viscous_scheme =
 !> 'crank_nicolson' at nu dt/dx^2 = 1, 5 and 10 (12, 60 and 120 times the explicit-diffusion bound
@@ -6,7 +6,7 @@
 !> velocity (stable: the slip vector changes by less than 1e-7 of itself per step; the predictor's
 !> hypre tolerance, 1e-8, leaves step-to-step noise of that order in it), its drag coefficient
 !> K = W / (6 pi mu a U_s) must agree with the fixed array of the same cell with explicit diffusion
-!> (K = 4.2794, docs/validation.md "Immersed boundary") and with Zick & Homsy (1982, J. Fluid Mech.
+!> (K = 4.2794, docs/studies/validation.md "Immersed boundary") and with Zick & Homsy (1982, J. Fluid Mech.
 !> 115, 13, Table 2: K = 4.292 at phi = 0.125), and the box's momentum (no net force on it) must
 !> stay small against rho_f L^3 U_s. Measured (tools/bench/bench_free_cn.f90): K = 4.2699, 4.2578,
 !> 4.2438 (-0.22%, -0.50%, -0.83% against the explicit free sphere's 4.2793), momentum 2.5e-6, 3.8e-4,
@@ -19,7 +19,7 @@ program test_free_settling_cn
   use test_framework, only: test_start, test_finish, check, check_close, check_below
   implicit none
   real(wp), parameter :: zick_homsy_0125 = 4.292_wp   ! Zick & Homsy 1982, Table 2, phi = 0.125
-  real(wp), parameter :: fixed_array_13 = 4.2794_wp   ! the fixed sphere at 13^3, explicit (docs/validation.md)
+  real(wp), parameter :: fixed_array_13 = 4.2794_wp   ! the fixed sphere at 13^3, explicit (docs/studies/validation.md)
   real(wp), parameter :: numbers(3) = [1.0_wp, 5.0_wp, 10.0_wp]       ! nu dt / dx^2
   real(wp), parameter :: to_explicit(3) = [0.005_wp, 0.01_wp, 0.015_wp]   ! bounds on K against the fixed array
   real(wp), parameter :: to_reference(3) = [0.01_wp, 0.015_wp, 0.02_wp]   ! and against Zick & Homsy

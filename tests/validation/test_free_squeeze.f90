@@ -1,5 +1,5 @@
 !> A free sphere pair pushed together head-on in fluid at rest, resolved by the immersed boundary
-!> (docs/validation.md, "Lubrication", free pair approach; module
+!> (docs/studies/validation.md, "Lubrication", free pair approach; module
 !> squeeze_case, run_free_squeeze), the fast subset: D/dx = 8 in a 48 x 24 x 24 box, constant
 !> opposite pushes F = 6 pi mu a U_p (U_p a / nu = 0.3), from rest 2 cells apart to 0.2 cell, without
 !> and with the sub-grid lubrication at the deck's default hand-over for the case's incremental

@@ -1,5 +1,5 @@
 !> A free needle settling with its axis at 45 degrees from gravity in the periodic box, resolved by
-!> the immersed boundary (docs/validation.md, "Free particles", the tilted spheroids). The
+!> the immersed boundary (docs/studies/validation.md, "Free particles", the tilted spheroids). The
 !> reference is the Oberbeck/Perrin mobility (module stokes_resistance) with the periodic array's
 !> box correction, per body axis 6 pi mu r M_i = 1/c_i - 2.837 r/L + C_i (r/L)^3 (Hasimoto 1959,
 !> J. Fluid Mech. 5, 317; module settling_sphere_case): the ladder of make validate (bench_free_particles
@@ -8,7 +8,7 @@
 !> (thin dimension 4.4 cells, r/L = 0.118), stopped earlier (relative change of the slip below
 !> 2e-6 per step), and asserts:
 !> - the body-frame mobilities equal the ladder's converged 32^3 values (0.6459 along, 0.4345
-!>   across, docs/validation.md) to 1%;
+!>   across, docs/studies/validation.md) to 1%;
 !> - with C_i of the ladder's fit (4.0 along, 22.8 across), the settling speed and the drift angle
 !>   equal the reference within 5% (the issue's bound);
 !> - the needle drifts towards its axis (axis (1, 1, 0)/sqrt(2), gravity along x): the slip has a
@@ -27,7 +27,7 @@ program test_free_tilted_settling
                                   drift_angle_degrees
   use test_framework, only: test_start, test_finish, check, check_close, check_below
   implicit none
-  real(wp), parameter :: ladder_32(2) = [0.6459_wp, 0.4345_wp]   ! docs/validation.md, converged to 1e-8 per step
+  real(wp), parameter :: ladder_32(2) = [0.6459_wp, 0.4345_wp]   ! docs/studies/validation.md, converged to 1e-8 per step
   real(wp), parameter :: ladder_cubic(2) = [4.0_wp, 22.8_wp]     ! C along / across, boxes 32^3 and 40^3
   type(settling_result_t) :: result
   real(wp) :: reference(3), angle, angle_reference

@@ -1,7 +1,7 @@
 !> The Crank-Nicolson predictor with the immersed-boundary rows solved with hypre (immersed_predictor):
 !> - simple-cubic sphere array, phi = 0.125, D/dx = 8.06 (13^3): at nu dt / dx^2 = 0.06 (below the
 !>   explicit-diffusion limit) the steady K equals the explicit-diffusion run's to 0.1% (the same
-!>   steady equations; the splitting's dt-dependence, docs/validation.md, is below that there);
+!>   steady equations; the splitting's dt-dependence, docs/studies/validation.md, is below that there);
 !> - at nu dt / dx^2 = 1 and 5 (8 and 40 times the explicit-diffusion limit 1/8 of this grid's
 !>   AB2 step) K within 5% of Zick & Homsy (1982, J. Fluid Mech. 115, 13, Table 2: K = 4.292),
 !>   steady in fewer than a fifth of the explicit run's steps, BiCGSTAB + FFT in at most 20 iterations;

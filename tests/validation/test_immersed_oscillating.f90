@@ -1,4 +1,4 @@
-!> The oscillating sphere (validation ladder rung 8; docs/validation.md):
+!> The oscillating sphere (validation ladder rung 8; docs/studies/validation.md):
 !> - the reference: Stokes' (1851) complex force equals the real form of Landau & Lifshitz, Fluid
 !>   Mechanics, section 24, problem 5, F = -[6 pi mu R (1 + R/delta) U + 3 pi R^2 sqrt(2 mu rho / omega)
 !>   (1 + 2 R / (9 delta)) dU/dt], and its box correction vanishes for an unbounded box;
@@ -8,7 +8,7 @@
 !>   force and the phase within 4 degrees (measured 0.5% and -2.0 degrees; the fit is over the second
 !>   period, so the start leaves some transient), and the largest spike (second difference / 2)
 !>   below 5% of the amplitude (1.9% measured; 26% before the sealed cells' pressure was extrapolated,
-!>   docs/validation.md), the run's logged load jump at status changes below 0.2 of the rms load
+!>   docs/studies/validation.md), the run's logged load jump at status changes below 0.2 of the rms load
 !>   (0.06 measured; 2.0 before).
 program test_immersed_oscillating
   use agglo_kinds, only: wp

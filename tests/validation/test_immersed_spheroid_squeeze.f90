@@ -1,4 +1,4 @@
-!> The squeeze film of two needles resolved by the immersed boundary (docs/validation.md,
+!> The squeeze film of two needles resolved by the immersed boundary (docs/studies/validation.md,
 !> "Lubrication", needles and disks; module spheroid_squeeze_case), the fast subset: two needles of
 !> aspect 5 (volume-equivalent radius 4 cells) crossed at right angles, equator to equator, approaching
 !> along the common normal at fixed speed, the placement held at gaps of 3 and 1 cells, steady Stokes

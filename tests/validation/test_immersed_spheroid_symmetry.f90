@@ -1,16 +1,16 @@
 !> Symmetry of the immersed boundary with spheroids (the validation ladder, rung 6;
-!> docs/validation.md): a needle and a disk with their axes along the drive (aspect 5, 4.4 cells thin,
+!> docs/studies/validation.md): a needle and a disk with their axes along the drive (aspect 5, 4.4 cells thin,
 !> sphere_array_case on 32^3), each centred on a grid symmetry point (a corner of
 !> cell faces, where the MAC grid is mirror-symmetric in all three axes), develop no torque: it must
 !> stay below 1e-9 F r over 300 steps of the driven flow (F = f L^3, r the volume-equivalent radius),
 !> while the same bodies at a sub-cell offset (whose sampling is not mirror-symmetric) develop a
-!> torque that is printed (the steady values are in docs/validation.md, rung 6). The turning case
+!> torque that is printed (the steady values are in docs/studies/validation.md, rung 6). The turning case
 !> (rotating about the axis) is checked the same way: the torque has no component across Omega; its
 !> torque history (history_every) holds the run's final torque as its last sample.
 !> (A disk turned edgewise to the drive by the quaternion of a quarter turn gives 2e-9 F r instead:
 !> ghost nodes on its mid-plane near the rim have two equidistant closest points, and the rotation's
 !> round-off, 6e-17 in cos(pi/2), picks one of them differently for mirror nodes.)
-!> The tight non-cubic box of the paper-resolution symmetry check (box_cells; docs/validation.md,
+!> The tight non-cubic box of the paper-resolution symmetry check (box_cells; docs/studies/validation.md,
 !> rung 6): a disk centred in a 12 x 28 x 28 box keeps the zero torque (its centre is the box's
 !> centre, a grid symmetry point, in every direction). And the box-size series of rung 6
 !> (fit_power_series): y = 0.7 + 25 x^3 - 40 x^5 at the r/L of the needle's four coarse boxes is

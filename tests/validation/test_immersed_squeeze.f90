@@ -9,7 +9,7 @@
 !>  - The decks' pressure-free projection ('non_incremental') at the decks' nu dt/dx^2 = 0.0786, at the
 !>    default hand-over gap of that scheme (config_collision's default_lubrication_handover, 0.75
 !>    cell): F / F_B = 0.932 measured (967 steps); within 2% of it. The hand-over was calibrated on
-!>    this force (docs/validation.md, "Lubrication": in the 64 x 32^2 box the total with the sub-grid
+!>    this force (docs/studies/validation.md, "Lubrication": in the 64 x 32^2 box the total with the sub-grid
 !>    model stays within -1.4% to +3.8% of F_B below the hand-over): a change of the pressure scheme,
 !>    the ghost rows or the splitting that moves the force at the hand-over by more than 2% breaks
 !>    that calibration. In the 64 x 32^2 box the force at 0.75 cell is 0.897 F_B at nu dt/dx^2 =

@@ -1,4 +1,4 @@
-!> The immersed boundary in Stokes flow (docs/validation.md, rungs 2, 4 and 5):
+!> The immersed boundary in Stokes flow (docs/studies/validation.md, rungs 2, 4 and 5):
 !> - simple-cubic sphere array at phi = 0.125, D/dx = 8.06 (13^3): K against Zick & Homsy (1982,
 !>   J. Fluid Mech. 115, 13, Table 2) K = 4.292, within 5% (implicit) and 11% (explicit);
 !> - ghost rows converge in at most 10 Jacobi sweeps to 1e-12 (rung 2);

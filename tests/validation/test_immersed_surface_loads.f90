@@ -1,6 +1,6 @@
 !> The face-sum loads and the mesh geometry on the steady simple-cubic sphere array (phi = 0.125,
-!> D/dx = 8.06, 13^3; docs/validation.md rungs 4 and 5; the full measurement at D/dx = 8-16 is
-!> `make validate`, tools/bench/bench_immersed_surface.f90, docs/validation.md):
+!> D/dx = 8.06, 13^3; docs/studies/validation.md rungs 4 and 5; the full measurement at D/dx = 8-16 is
+!> `make validate`, tools/bench/bench_immersed_surface.f90, docs/studies/validation.md):
 !> - face sum (320 faces) against the momentum-balance load: within 10% at D/dx = 8 (measured
 !>   -8.5%; the face sum's own discretisation error at this resolution;
 !>   rung 5's 5% bound applies at D/dx = 16, where `make validate` measures -1.7%); its lateral

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Restart of the pair scenes with $AGGLO (docs/validation.md, Pair scenes; docs/outputs.md,
+# Restart of the pair scenes with $AGGLO (docs/studies/validation.md, Pair scenes; docs/outputs.md,
 # Checkpoints), fluid = 'none' and 'stokes', on 1 and 2 ranks. Two needles of aspect ratio 5 placed
 # 0.2 um apart at 0.3 mm/s agglomerate through a train of collisions (about 1500 and 2300 impulses,
 # the first at step 3202 and 4519): the checkpoint lies between collisions already counted and ones

@@ -38,7 +38,7 @@ program bench_fluid
   call get_command_argument(2, argument); read(argument, *) steps
   allocate(fft_times(steps), poisson_times(steps), copy_times(steps), step_times(steps), parts(steps, 3), &
            io_times(3))
-  ! Water in a 1 mm box, random field of rms 5 cm/s, explicit diffusion (the target case of docs/performance.md, Fluid).
+  ! Water in a 1 mm box, random field of rms 5 cm/s, explicit diffusion (the target case of docs/studies/performance.md, Fluid).
   call fluid_solver_create(solver, grid_config_t(nx=n, ny=n, nz=n, length_x=1.0e-3_wp, length_y=1.0e-3_wp, &
       length_z=1.0e-3_wp), fluid_config_t(viscosity=1.0e-6_wp, density=997.0_wp, viscous_scheme='explicit', &
       fft_planning='estimate'))

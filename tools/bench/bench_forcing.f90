@@ -1,7 +1,7 @@
 !> Forcing benchmark (tools/bench.sh, `make bench`, BENCH_PARTS=forcing): the Eswaran-Pope forcing's
 !> cost per step (f written on every u, v, w face of the slab by the separable direct sums, then the
 !> OU update and projection of the 28 modes) against a whole fluid step (Crank-Nicolson + AB2 + FFT
-!> projection, as input/hit_box.nml) on N^3. Target (docs/performance.md): forcing <= 10% of a fluid step.
+!> projection, as input/hit_box.nml) on N^3. Target (docs/studies/performance.md): forcing <= 10% of a fluid step.
 !> Usage: mpirun -np R bench_forcing N REPEATS. Prints one line: N ranks forcing_ms step_ms percent
 !> (means over REPEATS, the slowest rank's time).
 program bench_forcing

@@ -1,4 +1,4 @@
-!> Crank-Nicolson with free particles (docs/validation.md, "Crank-Nicolson with free particles"):
+!> Crank-Nicolson with free particles (docs/studies/validation.md, "Crank-Nicolson with free particles"):
 !> the settling sphere of module settling_sphere_case (13^3, D/dx 8.06, phi = 0.125, calcite density
 !> ratio) with explicit diffusion at nu dt/dx^2 = 0.06 and with Crank-Nicolson + hypre at
 !> nu dt/dx^2 = 1, 5, 10 (4 and 40 particle sub-steps), and 1500 steps at 10, against Zick & Homsy

@@ -1,9 +1,9 @@
-!> Free particles resolved by the immersed boundary (make validate; docs/validation.md, "Free
+!> Free particles resolved by the immersed boundary (make validate; docs/studies/validation.md, "Free
 !> particles"). Sections (command-line arguments; none runs all three):
 !> - sphere [pressure_scheme]: a sphere settling in the periodic cube (module settling_sphere_case) at D/dx about
 !>   8, 12 and 16 (phi = 0.125), its drag coefficient K = W / (6 pi mu a U_s) against Zick & Homsy
 !>   (1982, J. Fluid Mech. 115, 13, Table 2: K = 4.292) and against the fixed sphere of the same cell
-!>   (docs/validation.md, "Immersed boundary": 4.2794, 4.2884, 4.2802); then at D/dx 8 the density
+!>   (docs/studies/validation.md, "Immersed boundary": 4.2794, 4.2884, 4.2802); then at D/dx 8 the density
 !>   ratios 2.72, 1.1, 0.5 and 0.3 (a buoyant sphere rises; at 1 there is no net weight) with and
 !>   without the added-mass stabilisation. pressure_scheme (default 'incremental', the ladder's):
 !>   'non_incremental', the resolved decks' default, runs the three resolutions only.

@@ -1,4 +1,4 @@
-!> Free pair approaching head-on (make validate; docs/validation.md, "Lubrication", "Free pair
+!> Free pair approaching head-on (make validate; docs/studies/validation.md, "Lubrication", "Free pair
 !> approach"): two spheres resolved by the immersed boundary
 !> (&scene particle_coupling = 'resolved') pushed together from rest by constant opposite forces in
 !> fluid at rest (src/driver/squeeze_case.f90, run_free_squeeze), without and with the sub-grid

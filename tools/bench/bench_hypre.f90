@@ -1,4 +1,4 @@
-!> Linear-solver benchmark (docs/performance.md, "Linear solver (hypre)"): the Crank-Nicolson
+!> Linear-solver benchmark (docs/studies/performance.md, "Linear solver (hypre)"): the Crank-Nicolson
 !> Helmholtz system (I - c L_h) x = b of one velocity component on N^3 (hypre_helmholtz_rows),
 !> c = r dx^2 / 2 at viscous numbers r = nu dt / dx^2 = 0.5, 2, 10, solved with every method x
 !> preconditioner of hypre_solver (the 'user' preconditioner is the FFT Helmholtz solve).

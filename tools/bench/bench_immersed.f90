@@ -1,5 +1,5 @@
 !> Cost of the coupled step (immersed bodies in prescribed motion) against the fluid-only step, and
-!> its parts (tools/bench.sh, `make bench`; docs/performance.md, "Immersed boundary").
+!> its parts (tools/bench.sh, `make bench`; docs/studies/performance.md, "Immersed boundary").
 !> Usage: mpirun -np R bench_immersed N STEPS BODIES COUPLING [CLOCK [MESH_LEVEL]]
 !>   COUPLING = implicit | explicit; CLOCK = wall (default) | cpu (the process's CPU time: on a shared
 !>   machine the 1-rank figures then do not count the time other processes hold the core);

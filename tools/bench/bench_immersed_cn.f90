@@ -1,6 +1,6 @@
 !> The Crank-Nicolson predictor with the immersed-boundary rows solved with hypre (immersed_predictor),
-!> the tables of docs/performance.md ("Crank-Nicolson with the immersed boundary") and
-!> docs/validation.md:
+!> the tables of docs/studies/performance.md ("Crank-Nicolson with the immersed boundary") and
+!> docs/studies/validation.md:
 !> 1. the solver choice: BiCGSTAB and GMRES with the FFT Helmholtz preconditioner (Jacobi on the
 !>    body rows), BoomerAMG and ILU(0), at nu dt / dx^2 = 0.1, 1, 10, for a sphere (D/dx = 12) and
 !>    a tilted disk (aspect 5, 4.1 cells thick) in a driven 40^3 box; mean iterations per

@@ -1,4 +1,4 @@
-!> The immersed-boundary validation ladder (make validate; docs/validation.md, "Immersed boundary"),
+!> The immersed-boundary validation ladder (make validate; docs/studies/validation.md, "Immersed boundary"),
 !> as Markdown tables. Each table is a section; the command-line arguments choose sections (none: all),
 !> and a section may be narrowed as section:D/dx:coupling, e.g. `rotating:16:implicit` or
 !> `dilute::explicit`.
@@ -46,7 +46,7 @@ program bench_immersed_ladder
     call run_section('spheroid-offsets')
     call run_section('spheroid-offsets:15:needle::4:crank_nicolson:5')
     call run_section('spheroid-offsets:8.8:disk::4:crank_nicolson:5')
-    ! 1.27 and 1.6 times the paper's thin dimension (docs/validation.md, rung 6): 8 offsets and the
+    ! 1.27 and 1.6 times the paper's thin dimension (docs/studies/validation.md, rung 6): 8 offsets and the
     ! ladder's, 16 for the needle across its axis at 19 cells and for both shapes at 1.6 times.
     call run_section('spheroid-offsets:19:needle:along:8:crank_nicolson:5:2:ladder')
     call run_section('spheroid-offsets:19:needle:across:16:crank_nicolson:5:2:ladder')
@@ -471,7 +471,7 @@ contains
         ';', ' Aitken limit ', limit, ' |'
   end subroutine print_tail
 
-  !> The box correction carried from a coarse grid to a fine one (docs/validation.md, rung 6),
+  !> The box correction carried from a coarse grid to a fine one (docs/studies/validation.md, rung 6),
   !> spheroid-transfer[:thin cells[:shape[:motion]]], default 8.8 cells, both shapes, all four motions.
   !> The continuum box correction at a given r/L does not depend on the grid, so it is measured on the
   !> coarse grid (4.4 cells thin) in boxes of 32, 40, 48 and 64 cells and fitted in the mobility
@@ -560,7 +560,7 @@ contains
   !> spheroid-symmetry[:thin cells[:shape]] (default the paper's thin dimension: needle 15, disk 8.8
   !> cells), in a tight box: the torque vanishes by symmetry in any periodic lattice of the body, so
   !> the box only has to hold it (2 nint(half extent) + 8 cells along each axis). Explicit diffusion,
-  !> Aitken stop as in the ladder. Bound: 1e-3 F r (rung 6, docs/validation.md).
+  !> Aitken stop as in the ladder. Bound: 1e-3 F r (rung 6, docs/studies/validation.md).
   subroutine spheroid_symmetry(spec)
     character(len=*), intent(in) :: spec
     character(len=8), parameter :: shapes(2) = [character(len=8) :: 'needle', 'disk']
@@ -614,7 +614,7 @@ contains
     case%box_cells = 2 * nint(half) + 8
   end function tight_box_case
 
-  !> The torque of a translating needle and disk over sub-cell offsets (docs/validation.md, rung 6),
+  !> The torque of a translating needle and disk over sub-cell offsets (docs/studies/validation.md, rung 6),
   !> spheroid-offsets[:thin cells[:shape[:motion[:count[:scheme[:nu dt/dx^2[:level[:ladder]]]]]]]],
   !> defaults 4.4 cells, both shapes, along and across, 8 offsets, explicit, 0.06, icosphere level 2. The
   !> offsets are the first `count` points of the R3 low-discrepancy sequence (Roberts 2018: the

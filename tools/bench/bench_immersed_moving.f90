@@ -1,4 +1,4 @@
-!> Moving bodies (make validate; docs/validation.md, "Moving bodies: status changes and the
+!> Moving bodies (make validate; docs/studies/validation.md, "Moving bodies: status changes and the
 !> oscillating sphere"): the oscillating sphere (validation ladder rung 8) against Stokes' (1851)
 !> force with the periodic box's mean-flow correction (src/driver/oscillating_sphere_case.f90), at
 !> D/dx = 8 and 12 in boxes L = 8 R and (D/dx = 8) L = 12 R, with the incremental pressure, the

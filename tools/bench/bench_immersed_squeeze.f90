@@ -1,4 +1,4 @@
-!> Squeeze film (make validate; docs/validation.md, "Lubrication"; ladder rung 11):
+!> Squeeze film (make validate; docs/studies/validation.md, "Lubrication"; ladder rung 11):
 !> two equal spheres approaching head-on at fixed speed in Stokes flow, the gap held fixed and the
 !> flow run to steady state at each gap (src/driver/squeeze_case.f90), against Brenner's exact force
 !> of two spheres. The gap (in cells) below which the error passes 10-20% is where the immersed

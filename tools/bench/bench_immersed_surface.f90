@@ -1,4 +1,4 @@
-!> The immersed boundary's surface loads and mesh geometry (make validate; docs/validation.md,
+!> The immersed boundary's surface loads and mesh geometry (make validate; docs/studies/validation.md,
 !> "Surface loads and mesh geometry"):
 !> 1. rung 5 of the validation ladder: the face-sum load (load_method = 'surface', icosphere of 80,
 !>    320 and 1280 faces) against the momentum-balance load on the steady simple-cubic sphere array

@@ -1,4 +1,4 @@
-!> The box's momentum budget of a settling body (docs/validation.md, "Needle and disk settling at a
+!> The box's momentum budget of a settling body (docs/studies/validation.md, "Needle and disk settling at a
 !> tilt"; module settling_sphere_case): the momentum rho_f dV sum_{fluid u nodes} u + m U_p, which no
 !> net force changes, against what the u nodes that changed status (covered or uncovered by the
 !> moving surface) carried across the budget's boundary, both over rho_f L^3 U_s, with the number of

@@ -1,5 +1,5 @@
 !> Staged fluid step against the fused one, and every part against the memory-bandwidth floor
-!> (tools/bench.sh, `make bench`; docs/performance.md, "Staged step and the roofline").
+!> (tools/bench.sh, `make bench`; docs/studies/performance.md, "Staged step and the roofline").
 !> Usage: mpirun -np R bench_stages N STEPS SCHEME     (SCHEME = explicit | crank_nicolson)
 !>
 !> Each repetition times, in turn and each with the slowest rank's time: one FFT pair, one fused
@@ -42,7 +42,7 @@ program bench_stages
   cn = (trim(scheme) == 'crank_nicolson')
   allocate(fft(steps), step_fused(steps), step_staged(steps), predict(steps), project(steps), finish(steps), &
            poisson(steps))
-  ! Water in a 1 mm box, random field of rms 5 cm/s (the target case of docs/performance.md, Fluid).
+  ! Water in a 1 mm box, random field of rms 5 cm/s (the target case of docs/studies/performance.md, Fluid).
   grid_cfg = grid_config_t(nx=n, ny=n, nz=n, length_x=1.0e-3_wp, length_y=1.0e-3_wp, length_z=1.0e-3_wp)
   fluid_cfg = fluid_config_t(viscosity=1.0e-6_wp, density=997.0_wp, viscous_scheme=trim(scheme), fft_planning='estimate')
   call fluid_solver_create(fused, grid_cfg, fluid_cfg)
