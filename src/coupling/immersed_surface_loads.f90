@@ -19,8 +19,8 @@
 !>   pressure probes use only the cells whose centre is outside every body (trilinear weights
 !>   renormalised over them): the pressure inside a body has no meaning, and with the incremental
 !>   scheme it drifts step after step at steady state (the re-imposition's cut-cell divergence is
-!>   projected out again every step), which an unmasked probe one cell out picks up (measured:
-!>   +1.3% of the face sum per 1000 steps at D/dx = 12, docs/studies/validation.md);
+!>   projected out again every step), which an unmasked probe one cell out picks up as a drift
+!>   of the face sum (docs/studies/validation.md, "Surface loads and mesh geometry");
 !> - viscous traction mu (grad u + grad u^T).n. Relative to the rigid motion, w = u - (U + Omega x r)
 !>   vanishes on the surface, so its tangential derivatives vanish there: grad w = (dw/dn) n^T; with
 !>   div w = 0 also n.dw/dn = 0, and the rigid part's rate of strain is zero, so
