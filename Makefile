@@ -59,6 +59,27 @@ SOURCES := $(shell find src -name '*.f90' | sort)
 C_SOURCES := $(shell find src -name '*.c' | sort)
 LIB_SOURCES := $(filter-out src/agglo.f90,$(SOURCES))
 LIB_OBJECTS := $(patsubst %.f90,$(OBJ)/%.o,$(notdir $(LIB_SOURCES))) $(patsubst %.c,$(OBJ)/%.o,$(notdir $(C_SOURCES)))
+# The validation cases (validation/README.md): their own library, linked into the test and bench
+# programs, never into agglo or libagglo.a.
+VALIDATION_DIRS := $(shell find validation -type d)
+VALIDATION_SOURCES := $(shell find validation -name '*.f90' | sort)
+VALIDATION_OBJECTS := $(patsubst %.f90,$(OBJ)/%.o,$(notdir $(VALIDATION_SOURCES)))
+# Each library also depends on a file listing its members, rewritten only when the list changes: a
+# source moved out of (or into) a library's folders rebuilds the library, never leaves it stale.
+LIB_MEMBERS := $(BUILD)/libagglo.members
+VALIDATION_MEMBERS := $(BUILD)/libvalidation.members
+ifneq ($(filter-out help clean deps tools-deps,$(MAKECMDGOALS)),)
+  ifeq ($(findstring n,$(firstword -$(MAKEFLAGS))),)   # not under make -n
+    $(shell mkdir -p $(BUILD) && { [ "$$(cat $(LIB_MEMBERS) 2>/dev/null)" = "$(notdir $(LIB_OBJECTS))" ] \
+              || echo "$(notdir $(LIB_OBJECTS))" > $(LIB_MEMBERS); })
+    $(shell { [ "$$(cat $(VALIDATION_MEMBERS) 2>/dev/null)" = "$(notdir $(VALIDATION_OBJECTS))" ] \
+              || echo "$(notdir $(VALIDATION_OBJECTS))" > $(VALIDATION_MEMBERS); })
+  endif
+endif
+$(LIB_MEMBERS):
+	@mkdir -p $(@D) && echo "$(notdir $(LIB_OBJECTS))" > $@
+$(VALIDATION_MEMBERS):
+	@mkdir -p $(@D) && echo "$(notdir $(VALIDATION_OBJECTS))" > $@
 TEST_SOURCES := $(shell find tests -name 'test_*.f90' ! -path 'tests/framework/*' | sort)
 TEST_SUPPORT := $(shell find tests -name '*.f90' \( -path 'tests/framework/*' -o ! -name 'test_*.f90' \) | sort)
 TEST_DIRS := $(shell find tests -type d)
@@ -67,7 +88,7 @@ TEST_SUPPORT_OBJECTS := $(patsubst %.f90,$(OBJ)/%.o,$(notdir $(TEST_SUPPORT)))
 BENCH_SOURCES := $(shell find tools/bench -name 'bench_*.f90' 2>/dev/null | sort)
 BENCH_PROGRAMS := $(patsubst %.f90,$(BUILD)/bench/%,$(notdir $(BENCH_SOURCES)))
 
-vpath %.f90 $(SRC_DIRS) $(TEST_DIRS) tools/bench
+vpath %.f90 $(SRC_DIRS) $(VALIDATION_DIRS) $(TEST_DIRS) tools/bench
 vpath %.c $(SRC_DIRS)
 
 DEB_PACKAGES := gfortran libopenmpi-dev openmpi-bin libfftw3-dev libfftw3-mpi-dev libhdf5-openmpi-dev \
@@ -107,9 +128,13 @@ build: $(BUILD)/agglo ## build build/agglo (out of source)
 $(BUILD)/agglo: $(OBJ)/agglo.o $(BUILD)/libagglo.a
 	$(Q)$(FC) $(FFLAGS) -o $@ $^ $(LIBS)
 
-$(BUILD)/libagglo.a: $(LIB_OBJECTS)
+$(BUILD)/libagglo.a: $(LIB_OBJECTS) $(LIB_MEMBERS)
 	@rm -f $@
-	$(Q)ar rcs $@ $^
+	$(Q)ar rcs $@ $(LIB_OBJECTS)
+
+$(BUILD)/libvalidation.a: $(VALIDATION_OBJECTS) $(VALIDATION_MEMBERS)
+	@rm -f $@
+	$(Q)ar rcs $@ $(VALIDATION_OBJECTS)
 
 $(OBJ)/%.o: %.f90 $(FLAGS_STAMP) | $(OBJ) $(MOD)
 	$(Q)$(FC) $(FFLAGS) -c $< -o $@
@@ -119,18 +144,18 @@ $(OBJ)/momentum_terms.o: private FFLAGS += $(STENCIL_FLAGS)
 $(OBJ)/%.o: %.c $(FLAGS_STAMP) | $(OBJ)
 	$(Q)$(CC) $(CFLAGS) -c $< -o $@
 
-$(BUILD)/tests/%: $(OBJ)/%.o $(TEST_SUPPORT_OBJECTS) $(BUILD)/libagglo.a | $(BUILD)/tests
-	$(Q)$(FC) $(FFLAGS) -o $@ $< $(TEST_SUPPORT_OBJECTS) $(BUILD)/libagglo.a $(LIBS)
+$(BUILD)/tests/%: $(OBJ)/%.o $(TEST_SUPPORT_OBJECTS) $(BUILD)/libvalidation.a $(BUILD)/libagglo.a | $(BUILD)/tests
+	$(Q)$(FC) $(FFLAGS) -o $@ $< $(TEST_SUPPORT_OBJECTS) $(BUILD)/libvalidation.a $(BUILD)/libagglo.a $(LIBS)
 
-$(BUILD)/bench/%: $(OBJ)/%.o $(BUILD)/libagglo.a | $(BUILD)/bench
-	$(Q)$(FC) $(FFLAGS) -o $@ $< $(BUILD)/libagglo.a $(LIBS)
+$(BUILD)/bench/%: $(OBJ)/%.o $(BUILD)/libvalidation.a $(BUILD)/libagglo.a | $(BUILD)/bench
+	$(Q)$(FC) $(FFLAGS) -o $@ $< $(BUILD)/libvalidation.a $(BUILD)/libagglo.a $(LIBS)
 
 $(OBJ) $(MOD) $(BUILD)/tests $(BUILD)/bench:
 	@mkdir -p $@
 
 # Module dependencies, generated from the sources (never maintained by hand).
-$(BUILD)/deps.mk: $(SOURCES) $(TEST_SOURCES) $(TEST_SUPPORT) $(BENCH_SOURCES) tools/fortran-deps.sh | $(OBJ)
-	@tools/fortran-deps.sh $(OBJ) $(SOURCES) $(TEST_SUPPORT) $(TEST_SOURCES) $(BENCH_SOURCES) > $@
+$(BUILD)/deps.mk: $(SOURCES) $(VALIDATION_SOURCES) $(TEST_SOURCES) $(TEST_SUPPORT) $(BENCH_SOURCES) tools/fortran-deps.sh | $(OBJ)
+	@tools/fortran-deps.sh $(OBJ) $(SOURCES) $(VALIDATION_SOURCES) $(TEST_SUPPORT) $(TEST_SOURCES) $(BENCH_SOURCES) > $@
 ifneq ($(filter-out help clean deps tools-deps,$(MAKECMDGOALS)),)
 include $(BUILD)/deps.mk
 endif

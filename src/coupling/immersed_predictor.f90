@@ -1,5 +1,5 @@
 !> The Crank-Nicolson momentum predictor with the immersed-boundary rows, solved with hypre
-!> (docs/theory.md, "Linear solver (hypre)"; issue: the implicit coupling with Crank-Nicolson).
+!> (docs/theory.md, "Linear solver (hypre)": the implicit coupling with Crank-Nicolson).
 !>
 !> Each velocity component c of the predictor satisfies, on its own staggered nodes,
 !>   fluid node:     (I - alpha L_h) u* = b                           (the Helmholtz row, alpha = nu dt / 2)
@@ -9,7 +9,7 @@
 !> point and the stencil, weights and kappa of immersed_geometry (pure mirror, kappa = 1, for the
 !> implicit coupling; the 1.5-cell image point, kappa <= 1, for the explicit one). The ghost rows'
 !> stencils may hold fluid nodes, so the whole system is solved at once: replacing the rows of an
-!> FFT Crank-Nicolson solution afterwards would not reach this fixed point.
+!> FFT Crank-Nicolson solution afterwards would not reach this fixed point (docs/theory.md).
 !>
 !> The system is non-symmetric (the ghost rows); it is solved per component with a hypre Krylov
 !> method (hypre_solver), by default BiCGSTAB preconditioned by the FFT Helmholtz solve with a
@@ -18,12 +18,12 @@
 !> when the nodes are classified again (bodies moved) and their values replaced when alpha
 !> changes (a new dt); the right-hand side every step.
 !>
-!> Loads: the momentum the body rows add is what the momentum-balance loads of immersed_boundary
+!> Loads: the momentum the body rows add is what the momentum-balance loads of immersed_loads
 !> need. Summed over the periodic box, sum (I - alpha L_h) u = sum u, so the system adds to the
 !> fluid rho dV sum_nodes (u* - b) = rho dV sum_{ghost, interior} [(I - alpha L_h) u* - b]: each
 !> ghost and interior node adds its Helmholtz-row residual, as if its value had been imposed on
 !> the value (I - alpha L_h) u* = b would have given it. That change goes to the step's bookkeeping
-!> (immersed_boundary account), so the box's momentum budget closes as with explicit diffusion.
+!> (immersed_loads account), so the box's momentum budget closes as with explicit diffusion.
 module immersed_predictor
   use agglo_kinds, only: wp
   use error_handling, only: fatal
@@ -39,7 +39,8 @@ module immersed_predictor
                           linear_solver_create, linear_solver_update_values, linear_solver_solve, rows_local_count
   use hypre_helmholtz_rows, only: global_row, helmholtz_rows_create, field_to_rows, rows_to_field
   use hypre_fft_preconditioner, only: fft_helmholtz_preconditioner_t, fft_preconditioner_create
-  use immersed_boundary, only: immersed_boundary_t, imposition_report_t, rigid_velocity, account, ghost_surface_value
+  use immersed_boundary, only: immersed_boundary_t, imposition_report_t, rigid_velocity, ghost_surface_value
+  use immersed_loads, only: account
   implicit none
   private
   public :: immersed_predictor_t, immersed_predictor_create, immersed_predictor_reclassified, &

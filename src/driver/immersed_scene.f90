@@ -13,6 +13,7 @@
 module immersed_scene
   use agglo_kinds, only: wp, i8
   use physical_constants, only: two_pi
+  use vector_algebra, only: cross
   use error_handling, only: fatal
   use parallel_env, only: is_root
   use logger, only: log_line
@@ -30,9 +31,12 @@ module immersed_scene
   use immersed_surface_loads, only: surface_loads_t, surface_loads_create, surface_loads_compute
   use config_bodies, only: bodies_config_t
   use immersed_geometry, only: immersed_body_t, thin_dimension_cells, node_fluid
-  use immersed_boundary, only: immersed_boundary_t, ibm_settings_t, imposition_report_t, ibm_set_bodies, &
-                               ibm_impose, ibm_begin_step, ibm_step_loads, cell_divergence_max, ibm_extend_pressure, &
-                               status_change_summary
+  use immersed_boundary, only: immersed_boundary_t, ibm_settings_t, imposition_report_t
+  use immersed_placement, only: ibm_set_bodies
+  use immersed_imposition, only: ibm_impose
+  use immersed_loads, only: ibm_begin_step, ibm_step_loads
+  use immersed_diagnostics, only: cell_divergence_max, status_change_summary
+  use immersed_pressure_extension, only: ibm_extend_pressure
   implicit none
   private
   public :: prescribed_motion_t, immersed_scene_t, immersed_scene_create, immersed_step, motion_body, &
@@ -268,8 +272,8 @@ contains
       axis = cfg%axis(:, n)
       if (norm2(axis) > 0.0_wp) then
         axis = axis / norm2(axis)
-        if (norm2(cross3(ex, axis)) > 1.0e-12_wp) then
-          motion(n)%orientation = quaternion_from_axis_angle(cross3(ex, axis), acos(max(-1.0_wp, min(1.0_wp, axis(1)))))
+        if (norm2(cross(ex, axis)) > 1.0e-12_wp) then
+          motion(n)%orientation = quaternion_from_axis_angle(cross(ex, axis), acos(max(-1.0_wp, min(1.0_wp, axis(1)))))
         else if (axis(1) < 0.0_wp) then
           motion(n)%orientation = quaternion_from_axis_angle([0.0_wp, 0.0_wp, 1.0_wp], acos(-1.0_wp))
         end if
@@ -280,12 +284,6 @@ contains
       motion(n)%frequency = cfg%oscillation_frequency(n)
       if (cfg%geometry == 'mesh') call build_icosphere_mesh(motion(n)%shape, cfg%mesh_level, motion(n)%mesh)
     end do
-  contains
-    pure function cross3(a, b) result(c)
-      real(wp), intent(in) :: a(3), b(3)
-      real(wp) :: c(3)
-      c = [a(2) * b(3) - a(3) * b(2), a(3) * b(1) - a(1) * b(3), a(1) * b(2) - a(2) * b(1)]
-    end function cross3
   end function motions_from_config
 
   !> The body at time t, its centre wrapped into the box.

@@ -86,7 +86,10 @@ module resolved_hydrodynamics
   use icosphere_mesh, only: icosphere_mesh_t, build_icosphere_mesh
   use stokes_resistance, only: spheroid_added_mass_coefficients, stokes_resistance_t, stokes_resistance_of
   use immersed_geometry, only: immersed_body_t, thin_dimension_cells
-  use immersed_boundary, only: ibm_settings_t, ibm_set_bodies, ibm_impose, imposition_report_t, ibm_fallback_rows
+  use immersed_boundary, only: ibm_settings_t, imposition_report_t
+  use immersed_placement, only: ibm_set_bodies
+  use immersed_imposition, only: ibm_impose
+  use immersed_diagnostics, only: ibm_fallback_rows
   use immersed_scene, only: immersed_scene_t, prescribed_motion_t, immersed_scene_create, immersed_step
   use pair_hydrodynamics, only: pair_hydrodynamics_t
   use rigid_body, only: angular_velocity_lab, added_inertia_t

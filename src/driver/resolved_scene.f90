@@ -27,7 +27,8 @@ module resolved_scene
   use flow_statistics_output, only: flow_output_t, flow_output_start, flow_output_due, flow_output_record, &
                                     flow_output_finish
   use parallel_env, only: global_sum
-  use immersed_boundary, only: ibm_settings_t, status_change_summary
+  use immersed_boundary, only: ibm_settings_t
+  use immersed_diagnostics, only: status_change_summary
   use immersed_geometry, only: fallback_count, saturated_count, immersed_body_t
   use immersed_predictor, only: default_predictor_config
   use particle_output, only: particle_output_t, particle_output_flush, particle_output_close

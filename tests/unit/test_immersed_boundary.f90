@@ -1,4 +1,4 @@
-!> The imposition of immersed_boundary on fields it must leave unchanged (docs/studies/validation.md,
+!> The imposition of immersed_imposition on fields it must leave unchanged (docs/studies/validation.md,
 !> rung 3: the mirror is exact for linear fields). A rigid-body field u = U + Omega x (x - X) over
 !> the whole box near a translating, rotating needle and a sphere (random orientation and sub-cell
 !> position, away from the periodic wrap so the field is linear over every stencil): trilinear
@@ -14,7 +14,10 @@ program test_immersed_boundary
   use spheroid, only: make_spheroid
   use fluid_grid, only: fluid_grid_t, grid_create, allocate_field
   use immersed_geometry, only: immersed_body_t, node_position
-  use immersed_boundary, only: immersed_boundary_t, imposition_report_t, ibm_set_bodies, ibm_impose, ibm_begin_step
+  use immersed_boundary, only: immersed_boundary_t, imposition_report_t
+  use immersed_placement, only: ibm_set_bodies
+  use immersed_imposition, only: ibm_impose
+  use immersed_loads, only: ibm_begin_step
   use test_framework, only: test_start, test_finish, check_below, check
   implicit none
   type(fluid_grid_t) :: grid

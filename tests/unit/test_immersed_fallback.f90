@@ -22,13 +22,17 @@
 !>    where the linear field needs d_G/s; the rows are exact for it only at s = s_min).
 program test_immersed_fallback
   use agglo_kinds, only: wp, i8
+  use vector_algebra, only: cross
   use parallel_env, only: parallel_start
   use random_stream, only: random_stream_t, stream_seed, stream_uniform, stream_normal
   use quaternion, only: random_orientation, rotate_to_body, rotate_to_lab
   use spheroid, only: make_spheroid, implicit_function
   use fluid_grid, only: fluid_grid_t, grid_create, allocate_field
   use immersed_geometry, only: immersed_body_t, immersed_geometry_t, node_position, fallback_count, saturated_count
-  use immersed_boundary, only: immersed_boundary_t, imposition_report_t, ibm_set_bodies, ibm_impose, ibm_begin_step
+  use immersed_boundary, only: immersed_boundary_t, imposition_report_t
+  use immersed_placement, only: ibm_set_bodies
+  use immersed_imposition, only: ibm_impose
+  use immersed_loads, only: ibm_begin_step
   use test_framework, only: test_start, test_finish, check_below, check_above, check_equal
   implicit none
   type(fluid_grid_t) :: grid
@@ -280,10 +284,4 @@ contains
       end associate
     end do
   end subroutine zero_ghosts
-
-  pure function cross(a, b) result(r)
-    real(wp), intent(in) :: a(3), b(3)
-    real(wp) :: r(3)
-    r = [a(2) * b(3) - a(3) * b(2), a(3) * b(1) - a(1) * b(3), a(1) * b(2) - a(2) * b(1)]
-  end function cross
 end program test_immersed_fallback

@@ -10,7 +10,7 @@
 !> spheroid is not a plane), so this test classifies the slab's nodes itself (solid where the
 !> distance along n into the slab is positive; ghost when a 6-neighbour is fluid) and builds the
 !> ghost records, in immersed_geometry's layout, from the plane's exact closest points
-!> B = G + d n, M = 2B - G (or B + 1.5 dx n); immersed_boundary then imposes them as it does for any
+!> B = G + d n, M = 2B - G (or B + 1.5 dx n); immersed_imposition then imposes them as it does for any
 !> body. The field s is linear over every stencil (stencils reach at most 3.2 dx from the wall,
 !> half a gap is 5 dx and half a slab 3 dx).
 !> The ghost values start from zero; after the imposition every ghost node holds the profile and no
@@ -26,7 +26,9 @@ program test_immersed_slab
   use fluid_grid, only: fluid_grid_t, grid_create, allocate_field
   use immersed_geometry, only: immersed_body_t, node_position, node_fluid, node_ghost, &
                                node_interior
-  use immersed_boundary, only: immersed_boundary_t, imposition_report_t, ibm_set_bodies, ibm_impose
+  use immersed_boundary, only: immersed_boundary_t, imposition_report_t
+  use immersed_placement, only: ibm_set_bodies
+  use immersed_imposition, only: ibm_impose
   use test_framework, only: test_start, test_finish, check, check_below
   implicit none
   integer, parameter :: n_cells = 48
@@ -222,13 +224,13 @@ contains
     end do
     ! Stencils reach at most 3 planes beyond a node; on one rank every stencil node beyond the
     ! slab is a periodic copy refreshed before each sweep.
-    if (ibm%halo_planes < 4) then
-      ibm%halo_planes = 4
-      deallocate(ibm%below, ibm%above)
-      allocate(ibm%below(0:n_cells + 1, 0:n_cells + 1, -3:0, 3), ibm%above(0:n_cells + 1, 0:n_cells + 1, &
+    if (ibm%planes%halo_planes < 4) then
+      ibm%planes%halo_planes = 4
+      deallocate(ibm%planes%below, ibm%planes%above)
+      allocate(ibm%planes%below(0:n_cells + 1, 0:n_cells + 1, -3:0, 3), ibm%planes%above(0:n_cells + 1, 0:n_cells + 1, &
                n_cells + 1:n_cells + 4, 3))
     end if
-    ibm%remote_ghosts = .true.
+    ibm%planes%remote_ghosts = .true.
   end subroutine build_slab
 
   !> Ghost values set to zero, so that the sweeps solve the ghost rows rather than confirm them.

@@ -42,7 +42,7 @@ program test_free_settling
   ratio = k(1) * 997.0_wp / 2710.0_wp
   write(text, '(a,f6.3)') 'face-on disk (aspect 5) added mass / mass at 2710/997: ', ratio
   print '(a)', trim(text)
-  call check_close(ratio, 1.107_wp, 0.01_wp, 'face_on_disk_added_mass_ratio_ibm_notes')
+  call check_close(ratio, 1.107_wp, 0.01_wp, 'face_on_disk_added_mass_ratio_potential_flow')
   shape = make_spheroid('sphere', 50.0e-6_wp, 2710.0_wp)
   call check_below(abs(rotational_added_inertia(shape, 997.0_wp)), 1.0e-30_wp, 'sphere_no_rotational_added_inertia')
   call rigid_body_of_spheroid(body, disk, [0.0_wp, 0.0_wp, 0.0_wp], [1.0_wp, 0.0_wp, 0.0_wp, 0.0_wp], &

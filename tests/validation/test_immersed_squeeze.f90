@@ -1,7 +1,7 @@
 !> The squeeze film resolved by the immersed boundary (validation ladder rung 11;
 !> docs/studies/validation.md, "Lubrication"), the fast subset: two spheres of D/dx = 8 in a
 !> 48 x 24 x 24 box approaching each other at fixed speed, the gap held fixed, steady Stokes flow
-!> (src/driver/squeeze_case.f90). Reference: Brenner's (1961, Chem. Eng. Sci. 16, 242) exact force of
+!> (validation/squeeze_case.f90). Reference: Brenner's (1961, Chem. Eng. Sci. 16, 242) exact force of
 !> the pair in unbounded fluid, F_B = 6 pi mu a U beta(h/a); the series itself is checked against its
 !> near-contact expansion in tests/unit/test_lubrication.
 !>  - Incremental pressure, 2 cells apart (h = a/2): the resolved force within 30% of F_B (measured

@@ -1,7 +1,7 @@
 !> Free pair approaching head-on (make validate; docs/studies/validation.md, "Lubrication", "Free pair
 !> approach"): two spheres resolved by the immersed boundary
 !> (&scene particle_coupling = 'resolved') pushed together from rest by constant opposite forces in
-!> fluid at rest (src/driver/squeeze_case.f90, run_free_squeeze), without and with the sub-grid
+!> fluid at rest (validation/squeeze_case.f90, run_free_squeeze), without and with the sub-grid
 !> lubrication of the particle system at the given hand-over gaps. Per run, a Markdown table at the
 !> gaps 4 ... 0.1 cells: the approach speed U of each sphere against the reference approach
 !> (approach_reference: Brenner's resistance, one-dimensional), the time to close from 4 cells

@@ -34,8 +34,11 @@ program bench_immersed
   use quaternion, only: quaternion_from_axis_angle
   use icosphere_mesh, only: build_icosphere_mesh
   use immersed_geometry, only: immersed_body_t
-  use immersed_boundary, only: ibm_settings_t, ibm_set_bodies, ibm_begin_step, ibm_impose, ibm_step_loads, &
-                               cell_divergence_max
+  use immersed_boundary, only: ibm_settings_t
+  use immersed_placement, only: ibm_set_bodies
+  use immersed_imposition, only: ibm_impose
+  use immersed_loads, only: ibm_begin_step, ibm_step_loads
+  use immersed_diagnostics, only: cell_divergence_max
   use immersed_scene, only: prescribed_motion_t, immersed_scene_t, immersed_scene_create, immersed_step, &
                             motion_body, motion_velocity
   implicit none

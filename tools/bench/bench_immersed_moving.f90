@@ -1,6 +1,6 @@
 !> Moving bodies (make validate; docs/studies/validation.md, "Moving bodies: status changes and the
 !> oscillating sphere"): the oscillating sphere (validation ladder rung 8) against Stokes' (1851)
-!> force with the periodic box's mean-flow correction (src/driver/oscillating_sphere_case.f90), at
+!> force with the periodic box's mean-flow correction (validation/oscillating_sphere_case.f90), at
 !> D/dx = 8 and 12 in boxes L = 8 R and (D/dx = 8) L = 12 R, with the incremental pressure, the
 !> incremental pressure without the sealed cells' extrapolation (the scheme before it, for the
 !> spikes), and the pressure-free projection. Prints a Markdown table: force amplitude and phase

@@ -1,6 +1,6 @@
 !> Squeeze film (make validate; docs/studies/validation.md, "Lubrication"; ladder rung 11):
 !> two equal spheres approaching head-on at fixed speed in Stokes flow, the gap held fixed and the
-!> flow run to steady state at each gap (src/driver/squeeze_case.f90), against Brenner's exact force
+!> flow run to steady state at each gap (validation/squeeze_case.f90), against Brenner's exact force
 !> of two spheres. The gap (in cells) below which the error passes 10-20% is where the immersed
 !> boundary stops carrying the squeeze force: the hand-over gap of the sub-grid lubrication
 !> (&collision lubrication_handover). Prints a Markdown table. Besides the force itself, the table
@@ -130,7 +130,7 @@ contains
                    * 2.0_wp * squeeze_speed) / result%reference - 1
   end function total_error
 
-  ! ---- Needles and disks (src/driver/spheroid_squeeze_case.f90) ----------------------------------
+  ! ---- Needles and disks (validation/spheroid_squeeze_case.f90) ----------------------------------
   !> `bench_immersed_squeeze spheroids [r/dx [configuration|all [gaps...]]]`: two needles or disks of
   !> aspect 5 (volume-equivalent radius r/dx, default 6, about the paper's resolution) in the five
   !> configurations of the case (default all) at fixed gaps (cells, the widest first; default 4 2 1

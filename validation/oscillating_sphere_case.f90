@@ -1,5 +1,5 @@
-!> The oscillating sphere (ibm notes section 8.5, rung 8; docs/validation.md): a sphere in a periodic
-!> box of fluid at rest oscillates along x, c(t) = c0 + A sin(omega t), so that its surface crosses
+!> The oscillating sphere (rung 8 of the validation ladder; docs/validation.md, "Moving bodies"): a
+!> sphere in a periodic box of fluid at rest oscillates along x, c(t) = c0 + A sin(omega t), so that its surface crosses
 !> grid nodes (nodes change status every few steps), and the x force by momentum balance is compared
 !> with Stokes' (1851) solution for a sphere in translational oscillation, in the complex form of
 !> Landau & Lifshitz, Fluid Mechanics, section 24, problem 5 (velocity U e^{i omega t}):

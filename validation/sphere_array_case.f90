@@ -5,7 +5,7 @@
 !> Drag coefficient K = F / (6 pi mu a U) with F = f L^3 the force per sphere (the drive over the
 !> whole cell, solid included) and U the superficial velocity, the flux through a cell face over its
 !> area (Zick & Homsy 1982, J. Fluid Mech. 115, 13, Table 2: K = 2.810 at phi = 0.064, 4.292 at
-!> phi = 0.125; ibm-notes section 5.1). U is measured on the x-face plane at the box edge, which the
+!> phi = 0.125). U is measured on the x-face plane at the box edge, which the
 !> sphere (diameter below the box) never cuts.
 !> Steady state: the relative change of U per step below steady_tolerance. With aitken_window > 0
 !> (translation only) the run stops earlier: the slowest mode of a dilute array is the spin-up of

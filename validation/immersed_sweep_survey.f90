@@ -18,7 +18,9 @@ module immersed_sweep_survey
   use spheroid, only: make_spheroid
   use fluid_grid, only: fluid_grid_t, grid_create, allocate_field
   use immersed_geometry, only: immersed_body_t, node_position, thin_dimension_cells
-  use immersed_boundary, only: immersed_boundary_t, imposition_report_t, ibm_set_bodies, ibm_impose
+  use immersed_boundary, only: immersed_boundary_t, imposition_report_t
+  use immersed_placement, only: ibm_set_bodies
+  use immersed_imposition, only: ibm_impose
   implicit none
   private
   public :: sweep_survey_t, run_sweep_survey

@@ -1,0 +1,255 @@
+!> The immersed-boundary imposition on the staggered velocity components (Mark & van Wachem 2008;
+!> docs/theory.md, "Immersed boundary: imposition and loads"): interior nodes take the rigid
+!> velocity u_rigid = U + Omega x r, ghost nodes G their row
+!>   (1 + kappa w_G) u_G = (1 + kappa) u_B - kappa sum_{j /= G} w_j u_j        (immersed_boundary)
+!> with the stencil, weights and kappa = d_G/d_M of immersed_geometry.
+!> - coupling 'implicit' (image point 'mirror', d_M = d_G): the stencils hold other ghost nodes,
+!>   so the ghost rows form a coupled system, solved by Jacobi sweeps over the ghost list to a
+!>   tolerance. Jacobi (every new value from the previous sweep's values) rather than Gauss-Seidel
+!>   so that the result does not depend on the ranks' ordering: 1 and 2 ranks agree to round-off.
+!>   Stencil corners on another rank are read from copies of the neighbours' planes
+!>   (immersed_ghost_exchange).
+!> - coupling 'explicit' (image point 'image', d_M = max(d_G, 1.5 h)): one evaluation of the row
+!>   (G's own weight, where the stencil still holds G, on the diagonal as above).
+!> The momentum each imposition adds to the grid goes into the load bookkeeping (immersed_loads).
+module immersed_imposition
+  use mpi_f08, only: MPI_Allreduce, MPI_IN_PLACE, MPI_MAX, MPI_INTEGER
+  use agglo_kinds, only: wp
+  use error_handling, only: fatal
+  use parallel_env, only: world, global_max
+  use fluid_grid, only: fluid_grid_t
+  use halo_exchange, only: exchange_slab_halos
+  use immersed_ghost_exchange, only: exchange_planes, plan_ghost_traffic, gather_sweep_result
+  use immersed_boundary, only: immersed_boundary_t, imposition_report_t, rigid_velocity, ghost_surface_value
+  use immersed_loads, only: account
+  implicit none
+  private
+  public :: ibm_impose
+
+contains
+
+  !> Impose the interior and ghost values on u, v, w (collective) and refresh their halos; the
+  !> momentum the imposition adds goes into the step's load bookkeeping. Stops the run when the
+  !> implicit ghost rows do not converge in max_sweeps sweeps.
+  subroutine ibm_impose(ibm, grid, u, v, w, report)
+    type(immersed_boundary_t), intent(inout) :: ibm
+    type(fluid_grid_t), intent(inout) :: grid
+    real(wp), intent(inout) :: u(0:, 0:, 0:), v(0:, 0:, 0:), w(0:, 0:, 0:)
+    type(imposition_report_t), intent(out) :: report
+    real(wp) :: change(3), scale(3), limit
+    real(wp), allocatable :: before(:, :)   ! (max ghosts, 3) ghost values before the imposition
+    real(wp), allocatable :: surface(:, :)  ! u_B of each ghost
+    integer :: c, sweep, max_sweeps, n_max
+    character(len=240) :: text
+
+    n_max = max(1, maxval([(ibm%geometry%component(c)%n_ghost, c = 1, 3)]))
+    allocate(before(n_max, 3), surface(n_max, 3))
+    change = 0
+    scale = 0
+    call impose_interior(ibm, grid, 1, u, change(1), scale(1))
+    call impose_interior(ibm, grid, 2, v, change(2), scale(2))
+    call impose_interior(ibm, grid, 3, w, change(3), scale(3))
+    call surface_velocities(ibm, grid, 1, u, surface(:, 1), before(:, 1), scale(1))
+    call surface_velocities(ibm, grid, 2, v, surface(:, 2), before(:, 2), scale(2))
+    call surface_velocities(ibm, grid, 3, w, surface(:, 3), before(:, 3), scale(3))
+    report%velocity_scale = max(global_max(maxval(scale)), tiny(1.0_wp))
+
+    max_sweeps = 1
+    if (ibm%settings%coupling == 'implicit') max_sweeps = ibm%settings%max_sweeps
+    report%residual = huge(1.0_wp)
+    ! The neighbours' planes are read only by stencils that leave the slab (none: nothing to copy).
+    if (ibm%planes%stencils_leave_slab .or. ibm%planes%remote_ghosts) then
+      call exchange_planes(ibm%planes, grid, u, v, w)
+      report%exchanges = report%exchanges + 1
+    end if
+    sweep = 0
+    if (ibm%planes%remote_ghosts .or. max_sweeps == 1) then
+      ! Coupled across ranks: every sweep waits for the neighbours' ghost values and the global residual.
+      if (ibm%planes%remote_ghosts .and. max_sweeps > 1 .and. .not. ibm%planes%exchange%planned) &
+        call plan_ghost_traffic(ibm%planes, grid, ibm%geometry)
+      call lockstep_sweeps()
+    else
+      ! No stencil reads another rank's ghost nodes, so each rank's ghost rows are a system of their
+      ! own: a rank sweeps until its own residual meets the tolerance, the ranks then agree on the
+      ! largest count, those that stopped earlier catch up, and the global residual is checked once.
+      ! The result is that of lockstep sweeps with a global residual every sweep (the same sweep
+      ! count and values), with one reduction where lockstep takes one per sweep.
+      do while (sweep < max_sweeps)
+        call sweep_once()
+        if (limit / report%velocity_scale <= ibm%settings%tolerance) exit
+      end do
+      report%sweeps = global_max_integer(sweep)
+      do while (sweep < report%sweeps)
+        call sweep_once()
+      end do
+      report%residual = global_max(limit) / report%velocity_scale
+      if (.not. (report%residual <= ibm%settings%tolerance)) call lockstep_sweeps()
+    end if
+    if (ibm%settings%coupling == 'implicit' .and. .not. (report%residual <= ibm%settings%tolerance)) then
+      write(text, '(a,i0,a,es10.3,a,es10.3,a)') 'immersed boundary: the ghost rows did not converge in ', &
+          max_sweeps, ' sweeps (residual ', report%residual, ' > tolerance ', ibm%settings%tolerance, &
+          '); raise &bodies max_sweeps, loosen ghost_tolerance, or check that no body is thinner than 4 cells'
+      call fatal(trim(text))
+    end if
+
+    call account_ghosts(ibm, grid, 1, u, before(:, 1), change(1))
+    call account_ghosts(ibm, grid, 2, v, before(:, 2), change(2))
+    call account_ghosts(ibm, grid, 3, w, before(:, 3), change(3))
+    report%largest_change = global_max(maxval(change)) / report%velocity_scale
+    call exchange_slab_halos(grid%slab, u, v, w)
+  contains
+
+    !> One Jacobi sweep of the three components' ghost rows on this rank (limit: the largest change).
+    subroutine sweep_once()
+      limit = 0
+      call jacobi_sweep(ibm, 1, u, surface(:, 1), limit)
+      call jacobi_sweep(ibm, 2, v, surface(:, 2), limit)
+      call jacobi_sweep(ibm, 3, w, surface(:, 3), limit)
+      sweep = sweep + 1
+    end subroutine sweep_once
+
+    !> Sweeps on every rank together until the global residual meets the tolerance or max_sweeps.
+    !> With ghost nodes coupled across ranks, one gather after each sweep brings the neighbours'
+    !> new ghost values (for the next sweep's stencils) and the largest change over all ranks: the
+    !> values and the residual of a neighbour exchange before the sweep plus a reduction after it,
+    !> so the sweeps, their count and every value are the same.
+    subroutine lockstep_sweeps()
+      real(wp) :: largest
+      do while (sweep < max_sweeps)
+        call sweep_once()
+        report%sweeps = sweep
+        if (ibm%planes%remote_ghosts .and. max_sweeps > 1) then
+          call gather_sweep_result(ibm%planes, grid, ibm%geometry, u, v, w, limit, largest)
+          report%exchanges = report%exchanges + 1
+        else
+          largest = global_max(limit)
+        end if
+        report%residual = largest / report%velocity_scale
+        if (report%residual <= ibm%settings%tolerance) exit
+      end do
+    end subroutine lockstep_sweeps
+  end subroutine ibm_impose
+
+  !> The largest of an integer over the ranks (collective).
+  integer function global_max_integer(local) result(largest)
+    integer, intent(in) :: local
+    largest = local
+    call MPI_Allreduce(MPI_IN_PLACE, largest, 1, MPI_INTEGER, MPI_MAX, world)
+  end function global_max_integer
+
+  subroutine impose_interior(ibm, grid, component, field, change, scale)
+    type(immersed_boundary_t), intent(inout) :: ibm
+    type(fluid_grid_t), intent(in) :: grid
+    integer, intent(in) :: component
+    real(wp), intent(inout) :: field(0:, 0:, 0:)
+    real(wp), intent(inout) :: change, scale
+    integer :: m, n, node(3)
+    real(wp) :: value, delta
+    associate (nodes => ibm%geometry%component(component))
+      do m = 1, nodes%n_interior
+        node = nodes%interior(:, m)
+        n = nodes%interior_body(m)
+        value = rigid_velocity(ibm, n, component, ibm%arms(component)%interior(:, m))
+        delta = value - field(node(1), node(2), node(3))
+        field(node(1), node(2), node(3)) = value
+        call account(ibm, grid, n, component, ibm%arms(component)%interior(:, m), delta)
+        change = max(change, abs(delta))
+        scale = max(scale, abs(value))
+      end do
+    end associate
+  end subroutine impose_interior
+
+  !> u_B of every ghost of one component, the ghost values before the imposition, and the scale.
+  subroutine surface_velocities(ibm, grid, component, field, surface, before, scale)
+    type(immersed_boundary_t), intent(in) :: ibm
+    type(fluid_grid_t), intent(in) :: grid
+    integer, intent(in) :: component
+    real(wp), intent(in) :: field(0:, 0:, 0:)
+    real(wp), intent(out) :: surface(:), before(:)
+    real(wp), intent(inout) :: scale
+    integer :: g
+    associate (nodes => ibm%geometry%component(component))
+      do g = 1, nodes%n_ghost
+        associate (ghost => nodes%ghost(g))
+          surface(g) = ghost_surface_value(ibm, component, g)
+          before(g) = field(ghost%node(1), ghost%node(2), ghost%node(3))
+          scale = max(scale, abs(surface(g)), abs(before(g)))
+        end associate
+      end do
+    end associate
+  end subroutine surface_velocities
+
+  !> One Jacobi sweep of the ghost rows of one component: every new value from the values before
+  !> the sweep; `limit` takes the largest change.
+  subroutine jacobi_sweep(ibm, component, field, surface, limit)
+    type(immersed_boundary_t), intent(in) :: ibm
+    integer, intent(in) :: component
+    real(wp), intent(inout) :: field(0:, 0:, 0:)
+    real(wp), intent(in) :: surface(:)
+    real(wp), intent(inout) :: limit
+    real(wp), allocatable :: updated(:)
+    real(wp) :: kappa, self_weight, neighbours
+    integer :: g, corner, k
+    associate (nodes => ibm%geometry%component(component))
+      allocate(updated(nodes%n_ghost))
+      do g = 1, nodes%n_ghost
+        associate (ghost => nodes%ghost(g))
+          kappa = ghost%extrapolation
+          neighbours = 0
+          self_weight = 0
+          do corner = 1, 8
+            if (corner == ghost%self_corner) then
+              self_weight = ghost%weight(corner)
+              cycle
+            end if
+            ! The corner's local plane, continued beyond the slab (lower corner + bit).
+            k = ghost%node(3) + ghost%lower_offset(3) + (corner - 1) / 4
+            neighbours = neighbours + ghost%weight(corner) * &
+                         plane_value(ibm, component, field, ghost%stencil(1, corner), ghost%stencil(2, corner), k)
+          end do
+          updated(g) = ((1.0_wp + kappa) * surface(g) - kappa * neighbours) / (1.0_wp + kappa * self_weight)
+        end associate
+      end do
+      do g = 1, nodes%n_ghost
+        associate (node => nodes%ghost(g)%node)
+          limit = max(limit, abs(updated(g) - field(node(1), node(2), node(3))))
+          field(node(1), node(2), node(3)) = updated(g)
+        end associate
+      end do
+    end associate
+  end subroutine jacobi_sweep
+
+  !> Value at i, j (global) and local plane k, which may lie beyond the slab (copied planes).
+  pure real(wp) function plane_value(ibm, component, field, i, j, k) result(value)
+    type(immersed_boundary_t), intent(in) :: ibm
+    integer, intent(in) :: component
+    real(wp), intent(in) :: field(0:, 0:, 0:)
+    integer, intent(in) :: i, j, k
+    if (k < 1) then
+      value = ibm%planes%below(i, j, k, component)
+    else if (k > ubound(field, 3) - 1) then
+      value = ibm%planes%above(i, j, k, component)
+    else
+      value = field(i, j, k)
+    end if
+  end function plane_value
+
+  !> Add the final ghost changes of one component to the load bookkeeping.
+  subroutine account_ghosts(ibm, grid, component, field, before, change)
+    type(immersed_boundary_t), intent(inout) :: ibm
+    type(fluid_grid_t), intent(in) :: grid
+    integer, intent(in) :: component
+    real(wp), intent(in) :: field(0:, 0:, 0:)
+    real(wp), intent(in) :: before(:)
+    real(wp), intent(inout) :: change
+    integer :: g
+    real(wp) :: delta
+    do g = 1, ibm%geometry%component(component)%n_ghost
+      associate (ghost => ibm%geometry%component(component)%ghost(g))
+        delta = field(ghost%node(1), ghost%node(2), ghost%node(3)) - before(g)
+        call account(ibm, grid, ghost%body, component, ibm%arms(component)%ghost(:, g), delta)
+        change = max(change, abs(delta))
+      end associate
+    end do
+  end subroutine account_ghosts
+end module immersed_imposition
