@@ -1,3 +1,4 @@
+! checks: 6
 !> The squeeze film resolved by the immersed boundary (ibm notes section 8.5, rung 11; issue 11,
 !> validation item 5; docs/validation.md, "Lubrication"), the fast subset: two spheres of D/dx = 8 in a
 !> 48 x 24 x 24 box approaching each other at fixed speed, the gap held fixed, steady Stokes flow
