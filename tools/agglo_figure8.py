@@ -1,14 +1,19 @@
 """agglo-figure8: the paper's Fig. 8 view of a run with a particle pair in the resolved fluid.
 
 Draws, from one field snapshot of a run directory (docs/outputs.md), the fluid's velocity magnitude
-on the plane through both particle centres, the exact sections of the two spheroids by that plane
-(their outlines) and the in-plane velocity vectors; writes a PNG (matplotlib).
+on a plane through the pair, the exact sections of the two spheroids by that plane (their
+outlines), the in-plane velocity vectors and, near contact, the closest points; the title gives the
+gap. Writes a PNG (matplotlib).
 
-The plane contains the line between the centres (minimum image across the periodic box) and a
-second direction: by default the pair's relative velocity (particles.h5), or a lab axis / vector
-given with --second-direction; the part of it along the centre line is removed. In-plane axes:
-s along the centre line (from particle 1 towards particle 2), t along the second direction,
-both from the pair's midpoint.
+Near contact (gap below the smallest semi-axis; --plane contact) the plane goes through both
+closest points and centre 1: s along the contact normal, t towards the centre, from the closest
+points' midpoint. Otherwise (--plane centres) it contains the line between the centres (minimum
+image across the periodic box) and a second direction: by default the pair's relative velocity
+(particles.h5), or a lab axis / vector given with --second-direction; the part of it along the
+centre line is removed. In-plane axes: s along the centre line (from particle 1 towards
+particle 2), t along the second direction, both from the pair's midpoint. The closest points and
+gap are particles.h5's when its row is at the snapshot's time, else solved from the poses
+(closest_points).
 
 The staggered velocity (u on x faces, v on y faces, w on z faces: docs/outputs.md, "Field
 snapshots") is interpolated trilinearly from the points where each component lives, periodic in
