@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# checks: 37
 # Bad decks: each must stop the run with a non-zero exit and a message that names the group,
 # the variable and what is allowed (docs/design.md, "Errors"). Runs the built executable ($AGGLO).
 set -u

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# checks: 8
 # Deck errors that only rank 0 (or each rank for itself) can see, on 2 ranks: the run directory
 # (an earlier run without overwrite, restart without a run or without a checkpoint, a directory
 # that cannot be made) and &fluid init_file (missing, not an HDF5 file). Each must stop every rank

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# checks: 37
 # Decks that a namelist read alone would accept while running a different case (or that crashed):
 # each must stop with a non-zero exit and one message naming the group, the variable, the value and
 # what is allowed, or the file, the line and what is wrong (docs/decks.md, "Errors").

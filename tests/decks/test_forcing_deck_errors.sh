@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# checks: 15
 # Bad &forcing input is rejected before anything runs, with a message naming the group, the
 # variable and the allowed range (docs/decks.md, &forcing). Each case runs $AGGLO on a small deck
 # and greps the error; a good deck must pass the checks.

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# checks: 26
 # Bad &dlvo / &collision / &pair integrator input is rejected before anything runs, with a message
 # naming the group, the variable, the value and the allowed range (docs/decks.md). Each case runs
 # $AGGLO on a small fluid-free pair deck and greps the error; the defaults must pass the checks.

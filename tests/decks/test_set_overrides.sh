@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# checks: 15
 # agglo DECK --set group.variable=value: the override reaches the run (run.nml, the resolved deck),
 # later values win, and a bad override is refused like a bad deck, by its name (docs/decks.md).
 set -u

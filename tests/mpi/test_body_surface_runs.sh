@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# checks: 11
 # The bodies' surfaces in the field snapshots (docs/outputs.md, "Bodies in the snapshots"), end to
 # end with $AGGLO; checked by check_body_surfaces.py (python3 standard library and h5dump):
 #  - prescribed bodies (a translating sphere, a rotating needle that crosses the periodic wrap):

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# checks: 2
 # Restarts from damaged checkpoints with $AGGLO (docs/outputs.md, "Checkpoints"), 2 ranks:
 #  - the newest checkpoint truncated (a full disk, a copy cut short) and a file merely named like a
 #    newer checkpoint (checkpoint_9999999999.h5, a copy of an older one): both are named in a warning

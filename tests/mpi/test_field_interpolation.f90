@@ -1,4 +1,5 @@
 ! ranks: 2
+! checks: 34
 !> Interpolation of grid fields to points (field_interpolation) on 2 ranks, for the three
 !> staggered velocity grids and the cell centres:
 !> - a trilinear field is interpolated exactly, with its exact gradient, at points anywhere in z

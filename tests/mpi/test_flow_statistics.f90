@@ -1,4 +1,5 @@
 ! ranks: 2
+! checks: 18
 !> Tests of flow_statistics on a field with known statistics, on 2 ranks (the FFT and the sums
 !> cross the slab boundary): u = U0 + A sin(2 pi y/L), v = B cos(6 pi z/L), w = C sin(4 pi x/L),
 !> each component sampled at its own MAC faces (divergence free: each depends only on a

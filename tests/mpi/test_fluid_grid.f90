@@ -1,4 +1,5 @@
 ! ranks: 2
+! checks: 5
 !> Tests of fluid_grid: the slab layout matches FFTW-MPI's and the halo exchange fills every
 !> halo cell (faces, edges, corners) with its periodic image.
 program test_fluid_grid

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# checks: 6
 # End-to-end runs of the resolved scene with $AGGLO (docs/studies/validation.md, Fluid):
 #  - restart: 2n steps in one run == n steps + restart + n steps, bit for bit (h5diff, no tolerance)
 #    on 2 ranks with CFL-controlled dt and Crank-Nicolson (the multistep history and dt_old travel

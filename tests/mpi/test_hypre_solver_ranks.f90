@@ -1,4 +1,5 @@
 ! ranks: 2
+! checks: 117
 !> Tests of hypre_solver on two ranks (z slabs): the checks of test_hypre_solver, with the
 !> system's rows split across the ranks, the ghost rows' mirror cubes crossing the slab
 !> boundary, and the distributed solution compared with a whole-box solve on one rank.

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# checks: 7
 # End-to-end runs of the prescribed-body scene with Crank-Nicolson diffusion (&fluid viscous_scheme =
 # 'crank_nicolson'): the predictor's system holds the immersed-boundary rows and is solved with
 # hypre (docs/theory.md, "Linear solver (hypre)"):

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# checks: 4
 # Bodies in prescribed motion in the Eswaran-Pope forced box (&scene particles = 'prescribed',
 # forcing = 'eswaran_pope', with the uniform drive of &bodies driving_force; docs/decks.md):
 #  - the deck runs on 2 ranks (a translating sphere crossing the rank boundary and a rotating

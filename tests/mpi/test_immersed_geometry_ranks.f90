@@ -1,4 +1,5 @@
 ! ranks: 2
+! checks: 14
 !> Tests of immersed_geometry on 2 ranks (z slabs of 16 planes): bodies across the rank boundary
 !> (z = L/2) and across the periodic wrap (z = 0, which is also a rank boundary). Each rank's
 !> classification, halo ring included, equals the brute-force reference

@@ -1,4 +1,5 @@
 ! ranks: 2
+! checks: 4
 !> The immersed-geometry classification that keeps its work arrays and node lists between calls
 !> equals a classification into a fresh geometry on 2 ranks (z slabs of 16 planes: bodies across
 !> the rank boundary and the periodic wrap), over 40 random placements of a needle and a disk

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# checks: 12
 # End-to-end runs of the resolved scene with bodies in prescribed motion (&scene particles =
 # 'prescribed', &bodies; docs/decks.md, docs/outputs.md bodies_loads.dat):
 #  - a translating sphere and a rotating needle in a driven box, 1 rank and 2 ranks (a body crosses

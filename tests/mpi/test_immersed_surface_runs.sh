@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# checks: 6
 # End-to-end runs with the face-sum loads and the mesh geometry (&bodies load_method = 'surface',
 # geometry = 'mesh', mesh_level; docs/decks.md, docs/outputs.md bodies_loads.dat):
 #  - a fixed sphere and a rotating needle in a driven box on the icosphere of 80 faces, 1 and 2

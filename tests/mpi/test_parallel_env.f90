@@ -1,4 +1,5 @@
 ! ranks: 2
+! checks: 7
 !> The agreements of parallel_env on 2 ranks that let a check made by one rank, or by each rank for
 !> itself, stop every rank together (error_handling: a collective stop needs every rank to call it):
 !> all_ranks (logical and), any_rank (logical or), root_text (rank 0's text everywhere). The ranks

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# checks: 5
 # The pair in the resolved fluid with point-particle coupling (&scene particle_coupling = 'point'),
 # with $AGGLO on small decks:
 #  - fluid at rest: the point particles feel exactly the 'stokes' scene's drag (u_f = 0, Du/Dt = 0),

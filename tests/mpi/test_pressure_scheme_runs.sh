@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# checks: 3
 # End-to-end runs of the resolved scene with &fluid pressure_scheme (docs/decks.md, docs/theory.md):
 #  - 'incremental' restarts bit for bit: 2n steps == n steps + restart + n steps (h5diff, no
 #    tolerance; 2 ranks, CFL dt, Crank-Nicolson): the pressure p^{n-1/2}, which the incremental

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# checks: 17
 # The resolved pair scene at its extremes (&scene particle_coupling = 'resolved';
 # docs/studies/validation.md, "Extremes"), with $AGGLO on short runs of
 # one base deck (a sphere pair, r = 40 um, 32^3 in a 0.25 mm box, D/dx = 10.2, fluid at rest,
@@ -21,6 +22,9 @@ AGGLO=${AGGLO:?AGGLO must be the agglo executable}
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
 cd "$work"
+# This run's count (tests/run_tests.sh, "Declared checks"): the 17 declared above, and with
+# EXTREMES=long the two long cases.
+checks=17; [ "${EXTREMES:-}" = long ] && checks=$((checks + 2)); echo "CHECKS $checks"
 
 cat > base.nml <<'NML'
 &run name = 'extreme', seed = 5, max_steps = 6, end_time = 1.0, dt = 1.0e-5, dt_mode = 'cfl', cfl_target = 0.4,

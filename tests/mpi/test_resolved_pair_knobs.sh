@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# checks: 7
 # The speed-accuracy knobs of the resolved pair scene (&scene particle_coupling = 'resolved'; issue
 # "the studies", section 3), each in a short free-pair run with $AGGLO (docs/studies/validation.md,
 # "Crank-Nicolson with free particles" and "Knobs of the resolved pair scene"):

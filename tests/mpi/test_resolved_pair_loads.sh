@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# checks: 3
 # The free pair's hydrodynamic load histories (&scene particle_coupling = 'resolved'; docs/outputs.md,
 # "The free pair's loads"), with $AGGLO on a small forced sphere-pair deck, 1 rank:
 #  - bodies_loads.dat has one row per body per fluid step, 25 columns, steps 1..16 in order;
@@ -45,7 +46,8 @@ if mpirun -np 1 "$AGGLO" whole.nml > whole.out 2>&1; then
   for q in force torque; do
     for p in 1 2; do dataset whole/particles.h5 /particle$p/${q}_hydrodynamic > ${q}$p.txt; done
   done
-  python3 - <<'PY'
+  # A crash of the check prints its traceback (the log) and a FAIL line, never nothing.
+  python3 - <<'PY' || echo "FAIL resolved_pair_loads/python_check: the embedded Python check crashed (traceback above)"
 import sys
 rows = [line.split() for line in open('whole/bodies_loads.dat') if not line.startswith('#')]
 ok_shape = len(rows) == 32 and all(len(r) == 25 for r in rows) \

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# checks: 10
 # Free particles resolved by the immersed boundary (&scene particle_coupling = 'resolved'), with
 # $AGGLO on small decks (docs/studies/validation.md, "Free particles"):
 #  - added mass: a calcite-shaped disk pair (aspect ratio 5) set moving face-on in fluid at rest,

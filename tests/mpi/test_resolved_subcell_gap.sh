@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# checks: 3
 # Two bodies far closer than a cell with explicit diffusion (docs/theory.md, "Two bodies closer than
 # half a cell"): the quiescent needle pair of input/quiescent_needle_resolved.nml at seed 1013 with
 # &pair hydrodynamics_from = 'first_contact' (the needles, tilted at random, close at 0.875 mm/s

@@ -1,4 +1,5 @@
 ! ranks: 2
+! checks: 19
 !> Tests of the timer registry on 2 ranks with known durations (no sleeps, no timed assertions):
 !> a replaceable clock returns readings the test sets, and timer_add takes explicit values. Rank r
 !> (0 or 1) records per timer a duration that depends on r, so min / mean / max over the ranks are

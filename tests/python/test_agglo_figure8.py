@@ -8,7 +8,14 @@ known pair in particles.h5, written here in the layout of docs/outputs.md):
 - the outlines lie on the spheroids (their exact sections by the plane); poses come from the
   snapshot's bodies when it has them;
 - the command writes a PNG (the latest snapshot by default, or --step / --time), and says why it
-  cannot draw a run without particles.h5.
+  cannot draw a run without particles.h5;
+- the closest points: the numerical solve against contacts constructed exactly (a point of body 1
+  and its normal, body 2 placed so that its support point in the opposite direction lies the gap
+  away: for convex bodies that pair is the closest one), spheres, an overlap;
+- a pair in contact (needles 1 nm apart, the contact far from the centres' plane) is drawn on the
+  plane through both closest points and centre 1 (from particles.h5's closest points at the
+  snapshot's time, or computed from the poses), with both closest points marked and the gap in the
+  title; a distant pair keeps the plane through the centres.
 """
 import subprocess
 import sys
@@ -67,17 +74,24 @@ def write_snapshot(run, step, time, fields, bodies=()):
             handle[f"surfaces/body_{n}/semi_axes"] = np.array(body["semi_axes"])
 
 
-def write_particles(run, times, centres, quaternions, velocities, radius=50.0e-6, aspect_ratio=0.2):
+def write_particles(run, times, centres, quaternions, velocities, radius=50.0e-6, aspect_ratio=0.2,
+                    shape="disk", contact=None):
+    """particles.h5 with the pair at rest in every row; contact = (gap, point1, point2) adds the
+    /pair datasets (the same in every row)."""
     with h5py.File(run / "particles.h5", "w") as handle:
         handle["time"] = np.asarray(times, dtype=float)
+        rows = len(times)
         for n in (0, 1):
-            rows = len(times)
             handle[f"particle{n + 1}/position"] = np.tile(centres[n], (rows, 1))
             handle[f"particle{n + 1}/quaternion"] = np.tile(quaternions[n], (rows, 1))
             handle[f"particle{n + 1}/velocity"] = np.tile(velocities[n], (rows, 1))
+        if contact is not None:
+            handle["pair/gap"] = np.full(rows, contact[0])
+            handle["pair/closest_point1"] = np.tile(contact[1], (rows, 1))
+            handle["pair/closest_point2"] = np.tile(contact[2], (rows, 1))
         handle["radius"] = radius
         handle["aspect_ratio"] = aspect_ratio
-        handle["shape"] = np.bytes_("disk")
+        handle["shape"] = np.bytes_(shape)
         handle["name"] = np.bytes_("synthetic")
 
 
@@ -124,7 +138,7 @@ def test_uniform_flow_and_pair_across_the_periodic_boundary(tmp_path):
     write_snapshot(run, 7, 1.0e-4, fields)
     centres = [np.array([0.97e-3, 0.40e-3, 1.15e-3]), np.array([0.05e-3, 0.42e-3, 0.03e-3])]
     write_particles(run, [1.0e-4], centres, QUATERNIONS, VELOCITIES)
-    view = fig.plane_view(str(run), resolution=30)
+    view = fig.plane_view(str(run), resolution=30, plane_choice="centres")   # the disks overlap
     plane = view["plane"]
     separation = np.array([0.08e-3, 0.02e-3, 0.08e-3])           # the minimum image
     assert plane.distance == pytest.approx(np.linalg.norm(separation), rel=1e-12)
@@ -177,7 +191,7 @@ def test_prescribed_bodies_without_particles_h5(tmp_path):
     three = [{"centre": c, "orientation": q, "semi_axes": (80e-6, 40e-6)}
              for c, q in zip([CENTRES[0], np.array([0.7e-3, 0.5e-3, 0.9e-3]), CENTRES[1]], QUATERNIONS * 2)]
     write_snapshot(run, 12, 5.0e-5, linear_field(), bodies=three)
-    view = fig.plane_view(str(run), resolution=5, chosen=(1, 3))
+    view = fig.plane_view(str(run), resolution=5, chosen=(1, 3), plane_choice="centres")
     assert view["pair"] is None and view["pose_source"] == "snapshot"
     assert np.allclose(view["plane"].centre2, CENTRES[1], rtol=0, atol=1e-18)
     assert "lab" in view["plane"].second_note                  # no relative velocity: a lab axis
@@ -214,3 +228,126 @@ def test_refusals(run, tmp_path):
     assert step.returncode == 1 and "no snapshot of step 5" in step.stderr and "0 40" in step.stderr
     bad = subprocess.run([str(TOOL), str(run), "--second-direction", "0,0"], capture_output=True, text=True)
     assert bad.returncode != 0
+
+
+# ---------------------------------------------------------------------------------------------
+# Closest points and the plane through the contact
+# ---------------------------------------------------------------------------------------------
+
+NEEDLE = fig.semi_axes_of(50.0e-6, 5.0)      # (a, b) = (146 um, 29.2 um), the default deck's needles
+
+
+def constructed_contact(centre1, q1, semi1, theta, phi, q2, semi2, gap):
+    """A pair whose closest points are known exactly: p1 on body 1 at the parametric angles
+    (theta from the symmetry axis, phi around it), n body 1's outward normal there, p2 = p1 + gap n,
+    and body 2 (orientation q2) centred so that its support point in the direction -n is p2. Body 1
+    lies in n . (x - p1) <= 0, body 2 in n . (x - p2) >= 0, so for gap > 0 no two points are nearer
+    than the gap, and p1, p2 are that near. Returns p1, p2, n, centre 2."""
+    a, b = semi1
+    local = np.array([a * np.cos(theta), b * np.sin(theta) * np.cos(phi), b * np.sin(theta) * np.sin(phi)])
+    rotation = fig.rotation_matrix(q1)
+    p1 = np.asarray(centre1, dtype=float) + rotation @ local
+    n = rotation @ (local / np.array([a * a, b * b, b * b]))
+    n /= np.linalg.norm(n)
+    p2 = p1 + gap * n
+    q = fig.support_matrix(q2, semi2)
+    return p1, p2, n, p2 + q @ n / np.sqrt(n @ q @ n)
+
+
+def test_closest_points_of_constructed_contacts():
+    rng = np.random.default_rng(8)
+    centre1 = np.array([0.5e-3, 0.4e-3, 0.6e-3])
+    for case in range(40):
+        q1, q2 = unit(rng.normal(size=4)), unit(rng.normal(size=4))
+        semi1 = NEEDLE if case % 2 == 0 else fig.semi_axes_of(50.0e-6, 0.2)     # needles, disks
+        semi2 = NEEDLE if case % 4 < 2 else fig.semi_axes_of(50.0e-6, 0.2)
+        gap = [1.0e-9, 5.0e-8, 2.0e-6, 4.0e-5][case % 4]
+        theta, phi = np.arccos(rng.uniform(-1.0, 1.0)), rng.uniform(-np.pi, np.pi)
+        p1, p2, n, centre2 = constructed_contact(centre1, q1, semi1, theta, phi, q2, semi2, gap)
+        found = fig.closest_points(centre1, q1, semi1, centre2, q2, semi2)
+        # The gap is stationary in the direction: it is found to round-off of the centre distance
+        # (3e-4 m x 1e-16); the points move with the direction, to 1e-6 of the gap or 1e-15 m.
+        assert found["gap"] == pytest.approx(gap, rel=1e-6, abs=1e-18), case
+        assert np.linalg.norm(found["point1"] - p1) <= max(1e-6 * gap, 1e-15), case
+        assert np.linalg.norm(found["point2"] - p2) <= max(1e-6 * gap, 1e-15), case
+        assert np.linalg.norm(found["normal"] - n) <= 1e-6, case
+        assert found["residual"] <= 1e-15
+    spheres = fig.closest_points([0.0, 0.0, 0.0], [1, 0, 0, 0], (40e-6, 40e-6), [30e-6, 40e-6, 0.0],
+                                 [0.6, 0.8, 0.0, 0.0], (40e-6, 40e-6))
+    assert spheres["gap"] == pytest.approx(50e-6 - 80e-6, rel=1e-12)    # overlap: minus the depth
+    assert np.allclose(spheres["point1"], [24e-6, 32e-6, 0.0], rtol=0, atol=1e-18)
+    assert np.allclose(spheres["normal"], [0.6, 0.8, 0.0], rtol=0, atol=1e-14)
+
+
+NEEDLE_Q1 = unit([0.9, 0.2, -0.3, 0.25])
+NEEDLE_Q2 = unit([0.3, -0.7, 0.5, 0.4])
+NEEDLE_C1 = np.array([0.45e-3, 0.40e-3, 0.62e-3])
+# Near the tip of needle 1 (0.35 rad from its axis): a side-by-side contact whose point is far from
+# the plane through both centres and their relative velocity.
+NEEDLE_P1, NEEDLE_P2, NEEDLE_N, NEEDLE_C2 = constructed_contact(NEEDLE_C1, NEEDLE_Q1, NEEDLE, 0.35, 1.1,
+                                                                NEEDLE_Q2, NEEDLE, 1.0e-9)
+
+
+@pytest.fixture(params=["stored", "computed"])
+def needles_in_contact(request, tmp_path):
+    """Needles 1 nm apart; particles.h5 with the closest points at the snapshot's time ('stored')
+    or without /pair datasets ('computed': the tool solves for them)."""
+    run = tmp_path / f"needles {request.param}"
+    run.mkdir()
+    write_snapshot(run, 40, 2.0e-4, linear_field())
+    contact = (1.0e-9, NEEDLE_P1, NEEDLE_P2) if request.param == "stored" else None
+    write_particles(run, [0.0, 2.0e-4], [NEEDLE_C1, NEEDLE_C2], [NEEDLE_Q1, NEEDLE_Q2], VELOCITIES,
+                    aspect_ratio=5.0, shape="needle", contact=contact)
+    return run, request.param
+
+
+def test_contact_plane_holds_both_closest_points_and_a_centre(needles_in_contact):
+    run, source = needles_in_contact
+    view = fig.plane_view(str(run), resolution=5)
+    plane, contact = view["plane"], view["contact"]
+    assert plane.kind == "contact" and plane.through == "centre 1"
+    assert ("particles.h5" in contact["source"]) == (source == "stored")
+    assert contact["gap"] == pytest.approx(1.0e-9, rel=1e-6)
+    for point in (NEEDLE_P1, NEEDLE_P2, NEEDLE_C1):
+        assert abs(plane.coordinates(point)[2]) <= 1e-15       # m: on the plane
+    assert abs(np.dot(plane.e1, plane.e2)) <= 1e-15 and np.dot(plane.e1, NEEDLE_N) == pytest.approx(1.0, abs=1e-12)
+    # The closest points sit at the view's origin, 1 nm apart along s; their markers' coordinates.
+    for (s, t), point in zip(view["markers"], (NEEDLE_P1, NEEDLE_P2)):
+        assert (s, t) == pytest.approx(plane.coordinates(point)[:2], abs=1e-15)
+    assert view["markers"][1][0] - view["markers"][0][0] == pytest.approx(1.0e-9, rel=1e-6)
+    # The outlines are the sections by this plane: both touch the origin.
+    for outline in view["outlines"]:
+        assert outline is not None and np.min(np.hypot(outline[0], outline[1])) <= 1.0e-6
+    # The plane through both centres misses the contact by micrometres: the picture this replaces.
+    centres = fig.plane_view(str(run), resolution=5, plane_choice="centres")["plane"]
+    assert centres.kind == "centres" and abs(centres.coordinates(NEEDLE_P1)[2]) > 5.0e-6
+
+
+def test_markers_and_gap_in_the_title(needles_in_contact, tmp_path):
+    run, _ = needles_in_contact
+    view = fig.plane_view(str(run), resolution=20, vectors=5)
+    figure = fig.render(view)
+    axes = figure.axes[0]
+    marked = {line.get_label(): (line.get_marker(), line.get_xdata()[0], line.get_ydata()[0])
+              for line in axes.get_lines() if line.get_marker() not in (None, "None", "")}
+    for n in (1, 2):
+        marker, s, t = marked[f"closest point {n}"]
+        assert (s, t) == pytest.approx(np.array(view["markers"][n - 1]) * 1.0e6, abs=1e-9)    # um
+    assert marked["closest point 1"][0] != marked["closest point 2"][0]
+    assert "gap 1 nm" in axes.get_title() and "plane through the closest points" in axes.get_title()
+    import matplotlib.pyplot as plt
+    plt.close(figure)
+    out = subprocess.run([str(TOOL), str(run), "-o", str(tmp_path / "n.png")], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    assert "gap 1 nm (1e-09 m)" in out.stdout and "plane through the closest points and centre 1" in out.stdout
+
+
+def test_distant_pair_keeps_the_centre_plane(run):
+    view = fig.plane_view(str(run), resolution=5)
+    a, b = fig.semi_axes_of(50.0e-6, 0.2)
+    assert view["contact"]["gap"] > a                          # farther than the thinnest semi-axis
+    assert view["plane"].kind == "centres" and view["markers"] is None
+    figure = fig.render(view)
+    assert f"gap {view['contact']['gap'] * 1e6:.3g} um" in figure.axes[0].get_title()
+    import matplotlib.pyplot as plt
+    plt.close(figure)

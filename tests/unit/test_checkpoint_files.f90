@@ -1,4 +1,5 @@
 ! ranks: 2
+! checks: 22
 !> Unit tests of checkpoint_files on 2 ranks: checkpoint transactions (components write and read their
 !> own groups, one commit), write-then-rename, newest valid checkpoint, pruning beyond
 !> checkpoints_kept, a killed run (a .tmp file left behind) that is ignored, and damaged checkpoints:

@@ -1,3 +1,4 @@
+! checks: 23
 !> Tests of closest_points: exact cases (spheres; coaxial and laterally offset parallel disks;
 !> tip-to-tip, side-by-side and crossed needles; overlaps), >= 1000 random pairs against an
 !> independent brute-force reference (dense sampling of body 1's surface, exact point-to-spheroid

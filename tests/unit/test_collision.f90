@@ -1,3 +1,4 @@
+! checks: 123
 !> Unit tests of collision: restitution of head-on spheres, conservation laws and energy in random
 !> oblique spheroid collisions (all three models), the same with random added masses and inertias
 !> carried through the impulse (the momentum and energy of bodies and added masses, module

@@ -1,3 +1,4 @@
+! checks: 54
 !> Unit tests of dlvo: Eq. 13 force values for the paper's Table 1, Grahame/Debye constants,
 !> curvature factor (Eq. 14 and Derjaguin) for spheres and needles, energy = integral of force,
 !> torque balance, and finite values at the extremes.

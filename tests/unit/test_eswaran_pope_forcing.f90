@@ -1,3 +1,4 @@
+! checks: 31
 !> Unit tests of eswaran_pope_forcing: the forced wavevector set, the Fourier content of the
 !> evaluated field (FFTW, serial), divergence-free coefficients (Eq. 4), Hermitian completion (real
 !> field), independence of the slab decomposition, the power input <f.u> (Parseval), the E&P

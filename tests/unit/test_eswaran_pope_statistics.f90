@@ -1,3 +1,4 @@
+! checks: 20
 !> Statistics of the Ornstein-Uhlenbeck coefficients of eswaran_pope_forcing, for both update forms.
 !> Theory (paper Eqs. 5-6; docs/physics.md section 3): every real and imaginary part of every component
 !> is an independent OU process with mean 0, variance sigma^2 and autocorrelation

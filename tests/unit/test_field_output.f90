@@ -1,4 +1,5 @@
 ! ranks: 2
+! checks: 8
 !> Unit tests of field_output on 2 ranks: snapshot files hold the fields bit for bit in the (nx, ny, nz)
 !> layout (h5dump shows (nz, ny, nx)); fields.xdmf is valid XML, lists every complete snapshot in step
 !> order with its time, places each staggered field on the grid of its MAC positions, and references

@@ -1,4 +1,5 @@
 ! ranks: 2
+! checks: 32
 !> Unit tests of hdf5_io on 2 ranks: a z-decomposed field written collectively and read back bit for
 !> bit on the same and on another decomposition (whole array on every rank, uneven split), scalars,
 !> arrays and strings round trip, nested groups, extendible datasets, serial files on one rank.

@@ -1,3 +1,4 @@
+! checks: 117
 !> Tests of hypre_solver on one rank (the same checks as test_hypre_solver_ranks, which runs them
 !> on two): every method x preconditioner on the Crank-Nicolson Helmholtz rows and on rows with
 !> immersed-boundary ghost rows, value updates, and non-convergence reported as a status.

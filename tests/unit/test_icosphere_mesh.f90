@@ -1,3 +1,4 @@
+! checks: 65
 !> Tests of icosphere_mesh: counts, closed and consistently oriented surface, vertices on the
 !> spheroid, outward unit normals, and second-order convergence of volume and area to the analytic
 !> spheroid with the subdivision level (edge length halves per level: error ratio -> 4); the

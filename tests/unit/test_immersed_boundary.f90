@@ -1,3 +1,4 @@
+! checks: 14
 !> The imposition of immersed_imposition on fields it must leave unchanged (docs/studies/validation.md,
 !> rung 3: the mirror is exact for linear fields). A rigid-body field u = U + Omega x (x - X) over
 !> the whole box near a translating, rotating needle and a sphere (random orientation and sub-cell

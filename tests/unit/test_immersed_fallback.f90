@@ -1,3 +1,4 @@
+! checks: 32
 !> The image-point fallback of immersed_geometry (docs/theory.md, "Immersed boundary geometry"): when the segment from the
 !> surface point B to the image point M enters another body, M is moved back along n to the middle
 !> of the gap and the ghost row extrapolates linearly with kappa = d_G/d_M. A needle and a disk one

@@ -1,3 +1,4 @@
+! checks: 3
 !> The body force of a forced box with immersed bodies (immersed_step with fluid_force_*, as the
 !> resolved scene passes the Eswaran-Pope f^n; docs/decks.md, &forcing): the predictor's force is
 !> the uniform drive plus the fluid force on the fluid nodes of the step's placement, and the drive

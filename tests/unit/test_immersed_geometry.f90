@@ -1,3 +1,4 @@
+! checks: 57
 !> Tests of immersed_geometry on 1 rank: node classification of u, v, w against an independent
 !> brute-force reference (tests/unit/immersed_reference.f90) for spheres of D/dx = 8 to 16 at random
 !> sub-cell offsets, needles and disks at random orientations, a body straddling the periodic wrap,

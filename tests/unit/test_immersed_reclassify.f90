@@ -1,3 +1,4 @@
+! checks: 3
 !> The immersed-geometry classification that keeps its work arrays and node lists between calls
 !> (every step of a moving body) equals a classification into a fresh geometry, on 1 rank, over 40
 !> random placements of a needle and a disk (tests/unit/reclassification_check.f90): every count,

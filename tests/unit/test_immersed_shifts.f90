@@ -1,3 +1,4 @@
+! checks: 6
 !> Node counts of the immersed-boundary classification under sub-cell shifts (the validation ladder,
 !> rung 1; docs/studies/validation.md): a needle and a disk of aspect 5 (volume-equivalent radius 0.1 mm
 !> in a 1 mm box at 64^3: 4.4 and 7.5 cells thin), each at three fixed random orientations, moved by

@@ -1,3 +1,4 @@
+! checks: 14
 !> A tilted plane wall through the ghost rows (the immersed-boundary validation ladder, rung 3;
 !> docs/studies/validation.md): a linear shear profile u = gamma s(x) t, zero on the wall, s the signed
 !> distance to the wall and t a tangent, must come out of the imposition unchanged, because the

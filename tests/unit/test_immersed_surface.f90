@@ -1,3 +1,4 @@
+! checks: 24
 !> The mesh geometry (mesh_distance) and the face-sum loads (immersed_surface_loads) on fields whose
 !> loads are known:
 !> - closest point on the icosphere of a spheroid against a brute-force search over points sampled

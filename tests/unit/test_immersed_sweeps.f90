@@ -1,3 +1,4 @@
+! checks: 8
 !> Convergence of the implicit ghost rows (the immersed-boundary validation ladder, rung 2;
 !> docs/studies/validation.md): needles and disks of aspect 5 (volume-equivalent radius 0.1 mm in a 1 mm box, the
 !> disk 4.4 cells thick) at 16 random orientations and positions each, with random rigid motion, at

@@ -1,3 +1,4 @@
+! checks: 18
 !> Jeffery orbits (physics.md section 5): the rotation integrator of rigid_body / quaternion driven by
 !> the imposed torque-free kinematics of a spheroid in Stokes flow, for aspect ratio lambda = 5
 !> (prolate) and 1/5 (oblate), against Jeffery's exact solution.

@@ -1,3 +1,4 @@
+! checks: 38
 !> Unit tests of the sub-grid lubrication (src/particles/lubrication.f90; docs/theory.md, "Sub-grid
 !> lubrication"): the resistance of two spheres against the near-contact expansion written out by
 !> hand and against Brenner's exact series, the curvature-based reduced radius of a sphere facing a

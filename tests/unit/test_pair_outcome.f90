@@ -1,3 +1,4 @@
+! checks: 21
 !> Unit tests of pair_outcome (docs/theory.md, "Run outcome"): two calcite spheres (r = 50 um, the
 !> paper's Table 1 DLVO constants: Debye length 3.04 nm, so the DLVO range is 60 of them, 182 nm)
 !> in the states that separate the outcomes and decide whether they are settled.

@@ -1,4 +1,5 @@
 ! ranks: 2
+! checks: 16
 !> Unit tests of particle_output on 2 ranks (rank 0 writes, rank 1's calls are no-ops): pair time series
 !> rows and events round trip exactly across the in-memory buffer boundary, the h5py-visible shapes are
 !> (N), (N, 3), (N, 4), an events table exists (empty) in a run without collisions, generic named columns,

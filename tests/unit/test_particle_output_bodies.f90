@@ -1,3 +1,4 @@
+! checks: 7
 !> Unit tests of particle_output for N bodies: three bodies give /particle1..3, one group per pair
 !> (/pair1_2, /pair1_3, /pair2_3), /bodies and the colliding bodies in the events table; two bodies
 !> keep the pair layout (/pair, no /bodies, no body columns). Reference: the values the test wrote.

@@ -4,6 +4,7 @@
 !> ones, with the run identity untouched; the row counts carry on from the kept ones. 2 ranks (only
 !> rank 0 writes). Reference: the values the test wrote (sample k has time k, event k time 10 k).
 ! ranks: 2
+! checks: 11
 program test_particle_output_continue
   use agglo_kinds, only: wp, i8
   use particle_output, only: particle_output_t, pair_run_metadata_t, particle_record_t, pair_record_t, &

@@ -1,3 +1,4 @@
+! checks: 40
 !> Unit tests of particle_system: three spheres in a line colliding head-on (Newton's cradle, in the
 !> order of the pair list), eight spheroids placed at random without overlap in a periodic box and
 !> stepped with DLVO and collisions, and a pair straddling the periodic boundary against the same

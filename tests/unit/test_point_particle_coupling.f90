@@ -1,3 +1,4 @@
+! checks: 45
 !> Point-particle coupling (coupling/point_particle_coupling) through the particle system's step:
 !> - a sphere released at rest in a uniform flow relaxes to the fluid velocity as
 !>   U - v(t) = U exp(-t / tau), tau = m / (6 pi mu a) (Stokes drag, quasi-steady), and with the

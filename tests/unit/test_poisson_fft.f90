@@ -1,4 +1,5 @@
 ! ranks: 2
+! checks: 3
 !> Tests of poisson_fft on an anisotropic grid split over 2 ranks.
 !> Manufactured discrete solutions: pick phi, form rhs = L phi with the same 7-point stencil the
 !> solver inverts; the FFT solve with the modified wavenumbers (docs/physics.md section 2) must return

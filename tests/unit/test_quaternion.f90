@@ -1,3 +1,4 @@
+! checks: 17
 !> Unit tests of quaternion: algebra, rotation matrix, axis-angle and matrix round trips, the
 !> kinematic update (exactness, norm drift over 1e6 steps, body-frame convention) and Shoemake's
 !> uniform random orientation.

@@ -1,3 +1,4 @@
+! checks: 7
 !> Unit tests of random_stream: reproducibility, restart of the stream, moments of the deviates.
 program test_random_stream
   use agglo_kinds, only: wp, i8

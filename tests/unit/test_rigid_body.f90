@@ -1,3 +1,4 @@
+! checks: 17
 !> Unit tests of rigid_body: torque-free symmetric top against its exact solution (precession
 !> rate (I3 - I1) w3 / I1 in the body frame, Landau & Lifshitz, Mechanics, sec. 33), measured
 !> convergence orders of both integrators, energy and angular-momentum conservation, constant

@@ -1,3 +1,4 @@
+! checks: 16
 !> Unit tests of the run log's header text: the deck echo without namelist padding, the compiler
 !> options summarised and wrapped. Reference: the lines gfortran's namelist output writes (padded
 !> character values, blanks around numbers), compacted by hand.

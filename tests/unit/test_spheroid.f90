@@ -1,3 +1,4 @@
+! checks: 81
 !> Unit tests of spheroid: semi-axes of the paper's shapes, mass and inertia against slice-wise
 !> quadrature of the solid, area against quadrature of the surface, principal curvatures and
 !> directions against finite differences of the parametric surface, pole/equator values, the

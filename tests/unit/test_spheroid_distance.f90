@@ -1,3 +1,4 @@
+! checks: 18
 !> Tests of spheroid_distance: point-to-spheroid closest point, normal and signed distance against an
 !> independent brute-force reference (dense Fibonacci sampling of the whole 3-D surface, then a
 !> Newton polish of the Lagrange conditions X - p + lambda D X = 0, X.D X = 1 with D = diag(a, b, b)^-2,

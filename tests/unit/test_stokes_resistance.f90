@@ -1,3 +1,4 @@
+! checks: 31
 !> Unit tests of stokes_resistance: Oberbeck/Perrin coefficients against docs/physics.md section 4 and
 !> the analytic exponential decay of a lone spheroid's translation and rotation in quiescent fluid.
 program test_stokes_resistance

@@ -1,3 +1,4 @@
+! checks: 7
 !> Tests of text_format: the exact texts of messages and files (fixed Fortran edit descriptors:
 !> ES12.5, ES13.5E3 beyond two exponent digits, ES25.17E3, I0).
 program test_text_format

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# checks: 4
 # Flow statistics in a resolved run without forcing (&output flow_statistics_interval), with $AGGLO:
 #  - a decaying random field, 16^3 on 2 ranks, 10 steps, interval 5: flow_statistics.h5 holds the
 #    rows of steps 5 and 10 and their spectra, <f.u> = 0 (no forcing), and the log ends with the

@@ -1,4 +1,5 @@
 ! ranks: 2
+! checks: 11
 !> Validation of the fluid solver (fluid_solver, momentum_terms, initial_fields, fluid_diagnostics)
 !> on 2 ranks: projection to round-off, Taylor-Green spatial and temporal order, inviscid energy
 !> conservation, and the discrete energy budget dE/dt = -dissipation.

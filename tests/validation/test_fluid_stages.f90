@@ -1,4 +1,5 @@
 ! ranks: 1
+! checks: 26
 !> The staged fluid step on one rank (checks in fluid_stage_checks; the 2-rank program is
 !> test_fluid_stages_two_ranks).
 program test_fluid_stages

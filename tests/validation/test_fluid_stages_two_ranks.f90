@@ -1,4 +1,5 @@
 ! ranks: 2
+! checks: 34
 !> The staged fluid step on two ranks (checks in fluid_stage_checks), and the Taylor-Green orders
 !> of the incremental pressure scheme run through the staged step (test_fluid_solver has them for
 !> the default scheme and the fused step).

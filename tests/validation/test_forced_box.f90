@@ -1,3 +1,4 @@
+! checks: 2
 !> Forced periodic box: the fluid solver driven by the Eswaran-Pope forcing (fluid_advance's body
 !> force), checked against the energy budget and for exact continuation.
 !>

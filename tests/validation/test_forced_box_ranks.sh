@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# checks: 1
 # The forced box (fluid solver + Eswaran-Pope forcing, 40 steps from rest on 16^3) gives the same
 # velocity on 1 and 2 ranks to 1e-12 relative (docs/studies/validation.md, Forcing): the forcing itself is identical bit for
 # bit on any slab layout (test_eswaran_pope_forcing), the solver's FFT and sums differ by round-off.

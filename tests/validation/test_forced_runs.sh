@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# checks: 8
 # End-to-end forced runs of the resolved scene with $AGGLO (docs/studies/validation.md, Forcing):
 #  - restart with forcing: 2n steps in one run == n steps + restart + n steps, bit for bit
 #    (h5diff without tolerance on the whole final checkpoint: fluid/* and forcing/state), 2 ranks;

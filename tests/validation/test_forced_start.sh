@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# checks: 6
 # A fresh forced run from a converged forced field (&fluid init = 'file'), with $AGGLO, 2 ranks
 # (docs/studies/validation.md, Forcing, "Start from a converged forced field"; docs/theory.md):
 #  - spin-up: a 16^3 box of the hit_box deck (epsilon* = 1.6e-4 m^2/s^3, T_L = 0.01 s) forced from

@@ -1,3 +1,4 @@
+! checks: 14
 !> A free sphere released at U_0 in fluid at rest, resolved by the immersed boundary
 !> (docs/studies/validation.md, "Free particles", the release decay): its velocity against the unsteady
 !> Stokes decay with added mass and Basset history (Maxey & Riley 1983, Phys. Fluids 26, 883;

@@ -1,3 +1,4 @@
+! checks: 5
 !> Rotational added inertia of a free disk resolved by the immersed boundary (docs/studies/validation.md,
 !> "Free particles"): a disk (aspect ratio 5) spun about a diameter in fluid at rest, no other load.
 !> Its potential-flow rotational added inertia about a diameter is 1.79 rho_f/rho_p of its own

@@ -1,3 +1,4 @@
+! checks: 8
 !> A free sphere settling in the periodic box, resolved by the immersed boundary (docs/studies/validation.md,
 !> "Free particles"): one sphere per cell is a simple-cubic array, so at steady state its slip
 !> velocity is the one at which the array's Stokes drag balances the net weight W:

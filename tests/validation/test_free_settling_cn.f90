@@ -1,3 +1,4 @@
+! checks: 12
 !> Crank-Nicolson + hypre with a free particle (docs/studies/validation.md, "Crank-Nicolson with free
 !> particles"): the settling sphere of test_free_settling (module settling_sphere_case, 13^3,
 !> D/dx 8.06, phi = 0.125, calcite density ratio 2.72) with &fluid viscous_scheme =

@@ -1,3 +1,4 @@
+! checks: 5
 !> A free sphere pair pushed together head-on in fluid at rest, resolved by the immersed boundary
 !> (docs/studies/validation.md, "Lubrication", free pair approach; module
 !> squeeze_case, run_free_squeeze), the fast subset: D/dx = 8 in a 48 x 24 x 24 box, constant

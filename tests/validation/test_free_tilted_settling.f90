@@ -1,3 +1,4 @@
+! checks: 10
 !> A free needle settling with its axis at 45 degrees from gravity in the periodic box, resolved by
 !> the immersed boundary (docs/studies/validation.md, "Free particles", the tilted spheroids). The
 !> reference is the Oberbeck/Perrin mobility (module stokes_resistance) with the periodic array's

@@ -1,3 +1,4 @@
+! checks: 4
 !> The Aitken stop of sphere_array_case (used by the spheroid rungs of `make validate`): a
 !> simple-cubic sphere array at phi = 0.064, D/dx = 7.9 (16^3), implicit, run once to steady state
 !> (relative change of U per step below 1e-10) and once stopped by Aitken's delta-squared on U

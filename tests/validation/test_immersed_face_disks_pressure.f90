@@ -1,3 +1,4 @@
+! checks: 3
 !> Two disks face to face half a cell apart, resolved by the immersed boundary (docs/theory.md,
 !> "Known limit: disks face to face within about a cell"; module spheroid_squeeze_case): aspect 5,
 !> volume-equivalent radius 6.43 cells (4.4 cells thick), axes along x, approaching along x at fixed

@@ -1,3 +1,4 @@
+! checks: 7
 !> The oscillating sphere (validation ladder rung 8; docs/studies/validation.md):
 !> - the reference: Stokes' (1851) complex force equals the real form of Landau & Lifshitz, Fluid
 !>   Mechanics, section 24, problem 5, F = -[6 pi mu R (1 + R/delta) U + 3 pi R^2 sqrt(2 mu rho / omega)

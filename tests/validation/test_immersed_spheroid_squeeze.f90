@@ -1,3 +1,4 @@
+! checks: 5
 !> The squeeze film of two needles resolved by the immersed boundary (docs/studies/validation.md,
 !> "Lubrication", needles and disks; module spheroid_squeeze_case), the fast subset: two needles of
 !> aspect 5 (volume-equivalent radius 4 cells) crossed at right angles, equator to equator, approaching

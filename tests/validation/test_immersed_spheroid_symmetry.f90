@@ -1,3 +1,4 @@
+! checks: 20
 !> Symmetry of the immersed boundary with spheroids (the validation ladder, rung 6;
 !> docs/studies/validation.md): a needle and a disk with their axes along the drive (aspect 5, 4.4 cells thin,
 !> sphere_array_case on 32^3), each centred on a grid symmetry point (a corner of

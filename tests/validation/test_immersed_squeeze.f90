@@ -1,3 +1,4 @@
+! checks: 6
 !> The squeeze film resolved by the immersed boundary (validation ladder rung 11;
 !> docs/studies/validation.md, "Lubrication"), the fast subset: two spheres of D/dx = 8 in a
 !> 48 x 24 x 24 box approaching each other at fixed speed, the gap held fixed, steady Stokes flow

@@ -1,3 +1,4 @@
+! checks: 11
 !> The immersed boundary in Stokes flow (docs/studies/validation.md, rungs 2, 4 and 5):
 !> - simple-cubic sphere array at phi = 0.125, D/dx = 8.06 (13^3): K against Zick & Homsy (1982,
 !>   J. Fluid Mech. 115, 13, Table 2) K = 4.292, within 5% (implicit) and 11% (explicit);

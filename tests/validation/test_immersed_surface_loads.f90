@@ -1,3 +1,4 @@
+! checks: 8
 !> The face-sum loads and the mesh geometry on the steady simple-cubic sphere array (phi = 0.125,
 !> D/dx = 8.06, 13^3; docs/studies/validation.md rungs 4 and 5; the full measurement at D/dx = 8-16 is
 !> `make validate`, tools/bench/bench_immersed_surface.f90, docs/studies/validation.md):

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# checks: 51
 # The shipped quiescent pair decks give what they gave before the particle system (N bodies, one
 # step routine) replaced the pair scene's private step. Reference values: recorded with the code of
 # the commit before that change (git log of this file), the same decks and seeds, on 1 rank.
@@ -39,8 +40,8 @@ EOF
     || { echo "FAIL $name: the run failed: $(grep -m1 -i 'error' "$work/$name/run.out")"; return 1; }
 }
 # check NAME OUTCOME COLLISIONS FIRST_TIME FINAL_GAP DIR: PASS/FAIL lines against the recorded values
-check() {
-  "$PY" - "$@" <<'EOF'
+check() { # a crash of the Python check prints its traceback (the log) and a FAIL line, never nothing
+  "$PY" - "$@" <<'EOF' || echo "FAIL ${1}_check: the embedded Python check crashed (traceback above)"
 import glob, json, sys
 name, outcome, collisions, first, gap = sys.argv[1:6]
 path = glob.glob(sys.argv[6] + '/' + name + '/output/*/summary.json')[0]

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# checks: 10
 # Restart of the pair scenes with $AGGLO (docs/studies/validation.md, Pair scenes; docs/outputs.md,
 # Checkpoints), fluid = 'none' and 'stokes', on 1 and 2 ranks. Two needles of aspect ratio 5 placed
 # 0.2 um apart at 0.3 mm/s agglomerate through a train of collisions (about 1500 and 2300 impulses,

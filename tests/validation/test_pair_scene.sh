@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# checks: 18
 # Pair scenes run end to end with the built executable ($AGGLO) against analytic references.
 set -u
 AGGLO=${AGGLO:?AGGLO must point to the built executable}
