@@ -24,12 +24,11 @@
 !>
 !> Every routine here is collective (all ranks call it).
 module checkpoint_files
-  use mpi_f08, only: MPI_Bcast, MPI_INTEGER, MPI_CHARACTER, MPI_COMM_WORLD
   use agglo_kinds, only: i8
   use error_handling, only: fatal
   use logger, only: log_line
   use file_system, only: make_directory, delete_file
-  use parallel_env, only: is_root, barrier
+  use parallel_env, only: is_root, barrier, root_text
   use run_directory, only: run_directory_path, run_file, confirm_run_deck, forget_run_file, checkpoint_subdirectory
   use directory_listing, only: list_directory, name_length
   use field_output, only: discard_snapshots_after
@@ -245,17 +244,17 @@ contains
     character(len=:), allocatable :: path
     character(len=:), allocatable :: reason
     integer(i8), allocatable :: steps(:)
-    character(len=4096) :: shared
-    integer :: length, newest
+    character(len=:), allocatable :: found
+    integer :: newest
     logical :: ok
-    shared = ''
+    found = ''
     if (is_root()) then
       call checkpoint_steps(.false., steps)
       do while (size(steps) > 0)
         newest = maxloc(steps, 1)
         call checkpoint_is_valid(checkpoint_path(steps(newest)), steps(newest), ok, reason)
         if (ok) then
-          shared = checkpoint_path(steps(newest))
+          found = checkpoint_path(steps(newest))
           exit
         end if
         call log_line('agglo: warning: checkpoint '//checkpoint_path(steps(newest))//' is not usable ('// &
@@ -263,9 +262,6 @@ contains
         steps = [steps(:newest - 1), steps(newest + 1:)]
       end do
     end if
-    length = len_trim(shared)
-    call MPI_Bcast(length, 1, MPI_INTEGER, 0, MPI_COMM_WORLD)
-    call MPI_Bcast(shared, len(shared), MPI_CHARACTER, 0, MPI_COMM_WORLD)
-    path = shared(1:length)
+    path = root_text(found)
   end function newest_checkpoint
 end module checkpoint_files

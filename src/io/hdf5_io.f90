@@ -20,7 +20,7 @@
 !> h5_create(..., checksums = .true.) stores every dataset chunked with HDF5's Fletcher-32 checksum
 !> filter (scalars as 1-element arrays, which h5_read_array reads as scalars): a corrupted chunk is
 !> then an error on reading, never wrong values; h5_verify reads a whole file to check it (checkpoints).
-!> Parallel files take paths of at most longest_parallel_path characters (Open MPI limit, below).
+!> Parallel files are handed to MPI-IO under a short name when their path is long (below).
 !> Call hdf5_io_finalize once before MPI_Finalize (the library is opened on first use).
 module hdf5_io
   use, intrinsic :: iso_c_binding, only: c_ptr, c_loc, c_char, c_null_char
@@ -42,20 +42,20 @@ module hdf5_io
   use mpi_f08, only: MPI_COMM_WORLD, MPI_INFO_NULL, MPI_Bcast, MPI_INTEGER8
   use agglo_kinds, only: wp, i8
   use error_handling, only: fatal
-  use file_system, only: file_exists, rename_file
+  use file_system, only: file_exists, rename_file, short_name_t, open_short_name, close_short_name
   use parallel_env, only: my_rank, barrier, all_ranks
   implicit none
   private
   public :: h5_file_t, h5_create, h5_open, h5_close, h5_flush, h5_exists, &
             h5_write_slab, h5_read_slab, h5_write_array, h5_read_array, h5_write_string, h5_read_string, &
-            h5_append, h5_truncate, h5_delete, h5_dataset_shape, h5_dataset_names, hdf5_io_finalize, h5_verify, &
-            longest_parallel_path
+            h5_append, h5_truncate, h5_delete, h5_dataset_shape, h5_dataset_names, hdf5_io_finalize, h5_verify
 
-  !> Longest path of a file opened through MPI-IO. Open MPI 4.1.4's shared-file-pointer component
+  !> Longest path handed to MPI-IO as it is. Open MPI 4.1.4's shared-file-pointer component
   !> 'lockedfile' probes every file it opens with a lock file named <path>.locktest.<rank>, built with
-  !> sprintf into a fixed buffer: with this Open MPI a 228-character path worked and 229 aborted
-  !> (buffer overflow, SIGABRT) on 1 and 2 ranks. 220 leaves room for rank numbers up to 9 digits.
-  integer, parameter :: longest_parallel_path = 220
+  !> sprintf into a 256-byte buffer: a 228-character path worked and 229 aborted (buffer overflow,
+  !> SIGABRT) on 1 and 2 ranks. A longer path is opened through a short name of the same file
+  !> (file_system, short_name_t); 220 leaves room for rank numbers up to 9 digits.
+  integer, parameter :: longest_direct_path = 220
 
   !> Longest dataset name h5_dataset_names returns (with its groups).
   integer, parameter, public :: dataset_name_length = 256
@@ -70,6 +70,7 @@ module hdf5_io
     logical :: checksums = .false.           !< datasets chunked with the Fletcher-32 filter
     character(len=:), allocatable :: path
     character(len=:), allocatable :: complete_path   !< '' or the name path gets when the file is closed
+    type(short_name_t) :: io_name            !< the name HDF5 and MPI-IO open (path, or a short name of it)
   end type h5_file_t
 
   !> Write a real(wp) / integer / integer(i8) scalar or array (rank 0's values).
@@ -169,7 +170,7 @@ contains
     file%serial = .false.
     if (present(serial)) file%serial = serial
     if (present(checksums)) file%checksums = checksums
-    call require_path_length(file)
+    call choose_io_name(file)
     call make_property_lists(file, access)
     if (file%checksums) then
       ! The 1.8 file format and later checksum the file's metadata too (superblock v2, object
@@ -177,7 +178,7 @@ contains
       call h5pset_libver_bounds_f(access, H5F_LIBVER_V18_F, H5F_LIBVER_LATEST_F, status)
       call require_ok(status, 'h5pset_libver_bounds', file)
     end if
-    call h5fcreate_f(file%path, H5F_ACC_TRUNC_F, file%id, status, access_prp=access)
+    call h5fcreate_f(file%io_name%path, H5F_ACC_TRUNC_F, file%id, status, access_prp=access)
     call require_ok(status, 'creating the file', file)
     call h5pclose_f(access, status)
     file%is_open = .true.
@@ -203,12 +204,12 @@ contains
       found = all_ranks(file_exists(file%path))
     end if
     if (.not. found) call fatal('hdf5_io: cannot open '//file%path//': no such file', collective=.not. file%serial)
-    call require_path_length(file)
+    call choose_io_name(file)
     call make_property_lists(file, access)
     if (writable) then
-      call h5fopen_f(file%path, H5F_ACC_RDWR_F, file%id, status, access_prp=access)
+      call h5fopen_f(file%io_name%path, H5F_ACC_RDWR_F, file%id, status, access_prp=access)
     else
-      call h5fopen_f(file%path, H5F_ACC_RDONLY_F, file%id, status, access_prp=access)
+      call h5fopen_f(file%io_name%path, H5F_ACC_RDONLY_F, file%id, status, access_prp=access)
     end if
     ! A parallel open that failed anywhere stops every rank: with a clean exit where it failed on all
     ! of them (e.g. an init_file that is not an HDF5 file); a rank holding the file open aborts instead.
@@ -222,15 +223,23 @@ contains
     file%writable = writable
   end subroutine h5_open
 
-  !> A parallel file's path must fit Open MPI's buffer (longest_parallel_path).
-  subroutine require_path_length(file)
-    type(h5_file_t), intent(in) :: file
+  !> The name the file is opened under: its path, or for a parallel file with a path longer than
+  !> longest_direct_path a short name of it. The file's own name (after the last '/') must then fit.
+  subroutine choose_io_name(file)
+    type(h5_file_t), intent(inout) :: file
     character(len=16) :: text
-    if (file%serial .or. len(file%path) <= longest_parallel_path) return
-    write(text, '(i0)') longest_parallel_path
-    call fatal('hdf5_io: the path '//file%path//' is longer than '//trim(text)// &
-               ' characters, the longest that MPI-IO opens safely here', collective=.false.)
-  end subroutine require_path_length
+    if (file%serial .or. len(file%path) <= longest_direct_path) then
+      file%io_name%path = file%path
+      return
+    end if
+    call open_short_name(file%path, file%io_name)
+    if (len(file%io_name%path) <= longest_direct_path) return
+    call close_short_name(file%io_name)
+    write(text, '(i0)') longest_direct_path
+    call fatal('hdf5_io: cannot open '//file%path//' through MPI-IO: no short name of it within '//trim(text)// &
+               ' characters (Open MPI 4.1 aborts on longer ones); a shorter file name (after the last /) is needed', &
+               collective=.false.)
+  end subroutine choose_io_name
 
   subroutine h5_close(file)
     type(h5_file_t), intent(inout) :: file
@@ -240,6 +249,7 @@ contains
     call h5pclose_f(file%transfer, status)
     call h5fclose_f(file%id, status)
     call require_ok(status, 'closing the file', file)
+    call close_short_name(file%io_name)
     file%is_open = .false.
     file%id = -1_hid_t
     file%transfer = -1_hid_t

@@ -37,7 +37,7 @@ module particle_output
 
   !> Identity of a pair run, written at the root of particles.h5.
   type :: pair_run_metadata_t
-    character(len=64) :: name = ''          !< run name (&run name)
+    character(len=256) :: name = ''         !< run name (&run name)
     character(len=16) :: shape = ''         !< 'sphere' | 'needle' | 'disk' | 'spheroid'
     real(wp) :: aspect_ratio = 1.0_wp       !< a/b of the spheroids
     real(wp) :: radius = 0.0_wp             !< m, volume-equivalent radius
@@ -84,7 +84,7 @@ module particle_output
 
   !> Contents of summary.json (docs/outputs.md).
   type :: run_summary_t
-    character(len=64) :: name = ''
+    character(len=256) :: name = ''
     integer(i8) :: seed = 0_i8
     character(len=16) :: shape = ''
     real(wp) :: aspect_ratio = 1.0_wp
