@@ -15,7 +15,7 @@
 !> A checkpoint of step n is written to <run dir>/checkpoints/checkpoint_<n, 10 digits>.h5.tmp and
 !> renamed to .../checkpoint_<n>.h5 only after the file is complete and closed (rename() is atomic on
 !> one file system): a run killed while writing leaves at most a .tmp file, which is never read.
-!> Every dataset carries a Fletcher-32 checksum (hdf5_io, checksums = .true.), and the commit writes
+!> Every dataset carries a Fletcher-32 checksum (hdf5_files, checksums = .true.), and the commit writes
 !> checkpoint/step (the step, as in the name) and last checkpoint/complete = 1. On restart the
 !> newest file is verified (it opens, every dataset reads back with its checksum, its stored step
 !> is the one in its name and it is marked complete); a damaged one (truncated, zeroed, corrupted)
@@ -32,7 +32,9 @@ module checkpoint_files
   use run_directory, only: run_directory_path, run_file, confirm_run_deck, forget_run_file, checkpoint_subdirectory
   use directory_listing, only: list_directory, name_length
   use field_output, only: discard_snapshots_after
-  use hdf5_io, only: h5_file_t, h5_create, h5_open, h5_close, h5_exists, h5_write_array, h5_read_array, h5_verify
+  use hdf5_files, only: h5_file_t, h5_create, h5_open, h5_close, h5_exists
+  use hdf5_datasets, only: h5_read_scalar, h5_write_array, h5_read_array
+  use hdf5_checks, only: h5_verify
   implicit none
   private
   public :: checkpoint_t, checkpoint_begin, checkpoint_commit, checkpoint_open_newest, checkpoint_open, &
@@ -139,7 +141,7 @@ contains
     character(len=*), intent(in) :: path
     checkpoint%path = path
     call h5_open(checkpoint%file, path, writable=.false.)
-    call h5_read_array(checkpoint%file, 'checkpoint/step', checkpoint%step)
+    call h5_read_scalar(checkpoint%file, 'checkpoint/step', checkpoint%step)
   end subroutine checkpoint_open
 
   !> End of a restart: every component has read its group. The field snapshots of later steps (an
@@ -224,8 +226,8 @@ contains
     if (.not. ok) then
       reason = 'not marked complete (no checkpoint/step and checkpoint/complete)'
     else
-      call h5_read_array(file, 'checkpoint/step', stored_step)
-      call h5_read_array(file, 'checkpoint/complete', complete)
+      call h5_read_scalar(file, 'checkpoint/step', stored_step)
+      call h5_read_scalar(file, 'checkpoint/complete', complete)
       write(text, '(i0)') stored_step
       if (stored_step /= step) then
         ok = .false.
