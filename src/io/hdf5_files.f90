@@ -203,9 +203,9 @@ contains
     if (len(file%io_name%path) <= longest_direct_path) return
     call close_short_name(file%io_name)
     write(text, '(i0)') longest_direct_path
-    call fatal('hdf5: cannot open '//file%path//' through MPI-IO: no short name of it within '//trim(text)// &
-               ' characters (Open MPI 4.1 aborts on longer ones); a shorter file name (after the last /) is needed', &
-               collective=.false.)
+    call fatal('hdf5: cannot open '//file%path//' through MPI-IO: Open MPI 4.1 aborts on names longer than '// &
+               trim(text)//' characters, and no short name of it fits (/proc/self/fd/<n>/<file name>: Linux, '// &
+               'a file name after the last / of at most about 195 characters)', collective=.false.)
   end subroutine choose_io_name
 
   subroutine h5_close(file)
