@@ -13,7 +13,7 @@ program agglo
   use parallel_env, only: parallel_start, parallel_stop, n_ranks
   use run_directory, only: prepare_run_directory, run_file
   use run_header, only: log_run_header
-  use hdf5_io, only: hdf5_io_finalize
+  use hdf5_files, only: h5_finalize
   use resolved_scene, only: run_resolved_scene
   use pair_scene, only: run_pair_scene
   use resolved_pair_scene, only: run_resolved_pair_scene
@@ -56,7 +56,7 @@ program agglo
 
   call log_line('agglo: run complete; outputs in '//run_file(''))
   call log_close()
-  call hdf5_io_finalize()
+  call h5_finalize()
   call parallel_stop()
 
 contains

@@ -12,6 +12,7 @@ module agglo_config
   use namelist_text, only: namelist_item_t, read_namelist_items
   use error_handling, only: fatal
   use config_bodies, only: bodies_config_t, write_bodies_group
+  use file_system, only: longest_path
   implicit none
   private
   public :: agglo_config_t, deck_group_names, write_config, config_items
@@ -27,7 +28,7 @@ module agglo_config
     type(dlvo_config_t) :: dlvo
     type(collision_config_t) :: collision
     type(bodies_config_t) :: bodies
-    character(len=4096) :: deck_path = ''    !< the deck file this configuration came from (PATH_MAX)
+    character(len=longest_path) :: deck_path = ''   !< the deck file this configuration came from
   end type agglo_config_t
 
   !> Every namelist group a deck may contain.

@@ -4,6 +4,7 @@ module config_fluid
   use deck_file, only: deck_t, check_namelist_read, require_positive, require_nonnegative, require_option, require_range, &
                        int_text
   use error_handling, only: input_error
+  use file_system, only: longest_path
   implicit none
   private
   public :: fluid_config_t, read_fluid_group, check_fluid_group, write_fluid_group
@@ -13,7 +14,7 @@ module config_fluid
     real(wp) :: viscosity = 1.0e-6_wp              !< m^2/s, kinematic (paper, Table 2)
     character(len=16) :: viscous_scheme = 'explicit'  !< 'explicit' | 'crank_nicolson'
     character(len=16) :: init = 'rest'             !< 'rest' | 'taylor_green' | 'random' | 'file'
-    character(len=256) :: init_file = ''           !< field file for init = 'file'
+    character(len=longest_path + 1) :: init_file = ''   !< field file for init = 'file'
     real(wp) :: init_amplitude = 1.0e-3_wp         !< m/s, velocity scale of 'taylor_green' / rms of 'random'
     real(wp) :: init_peak_wavenumber = 2.0_wp      !< spectrum peak of 'random', in units of 2 pi / length_x
     character(len=16) :: fft_planning = 'estimate' !< 'estimate' (reproducible) | 'measure' (faster plans, not bit-reproducible)
@@ -27,7 +28,7 @@ module config_fluid
   real(wp) :: density, viscosity, init_amplitude, init_peak_wavenumber, predictor_tolerance
   integer :: predictor_max_iterations
   character(len=16) :: viscous_scheme, init, fft_planning, pressure_scheme
-  character(len=256) :: init_file
+  character(len=longest_path + 1) :: init_file
   namelist /fluid/ density, viscosity, viscous_scheme, init, init_file, init_amplitude, init_peak_wavenumber, &
                   fft_planning, pressure_scheme, predictor_tolerance, predictor_max_iterations
 

@@ -3,12 +3,13 @@ module config_output
   use agglo_kinds, only: wp
   use deck_file, only: deck_t, check_namelist_read, require_nonnegative, require_positive_int, int_text
   use error_handling, only: input_error
+  use file_system, only: longest_path
   implicit none
   private
   public :: output_config_t, read_output_group, check_output_group, write_output_group
 
   type :: output_config_t
-    character(len=256) :: directory = ''      !< run directory; '' means output/<run name>
+    character(len=longest_path + 1) :: directory = ''   !< run directory; '' means output/<run name>
     integer :: stats_interval = 1             !< steps between time-series rows (fluid and particles)
     real(wp) :: field_interval = 0.0_wp       !< s of simulated time between field snapshots; 0 = start and end only
     integer :: checkpoint_interval = 0        !< steps between checkpoints; 0 = only at the end
@@ -17,7 +18,7 @@ module config_output
                                               !< 0 = &forcing statistics_interval if forced, else none
   end type output_config_t
 
-  character(len=256) :: directory
+  character(len=longest_path + 1) :: directory
   integer :: stats_interval, checkpoint_interval, checkpoints_kept, flow_statistics_interval
   real(wp) :: field_interval
   namelist /output/ directory, stats_interval, field_interval, checkpoint_interval, checkpoints_kept, &

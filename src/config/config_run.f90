@@ -9,7 +9,7 @@ module config_run
   public :: run_config_t, read_run_group, check_run_group, write_run_group
 
   type :: run_config_t
-    character(len=64) :: name = 'agglo'          !< run name, written into every output
+    character(len=256) :: name = 'agglo'         !< run name, written into every output (NAME_MAX 255)
     integer :: seed = 20250224                   !< seed of every random stream of the run
     logical :: restart = .false.                 !< continue from the newest complete checkpoint
     logical :: overwrite = .false.               !< allow replacing the outputs of an earlier run
@@ -23,7 +23,7 @@ module config_run
   end type run_config_t
 
   ! The namelist objects: module variables named as in the deck, copied to/from the type.
-  character(len=64) :: name
+  character(len=256) :: name
   integer :: seed, max_steps, progress_interval
   logical :: restart, overwrite
   real(wp) :: end_time, dt, cfl_target, cfl_limit

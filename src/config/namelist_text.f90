@@ -18,7 +18,7 @@ module namelist_text
     character(len=:), allocatable :: value      !< value text as written (trailing separators removed)
   end type namelist_item_t
 
-  integer, parameter :: longest_record = 8192   !< longer than any written item (strings are <= 256)
+  integer, parameter :: longest_record = 8192   !< longer than any written item (strings are <= 4096)
 
 contains
 

@@ -7,7 +7,21 @@ module file_system
   use, intrinsic :: iso_fortran_env, only: iostat_end, iostat_eor
   implicit none
   private
-  public :: rename_file, file_exists, directory_exists, make_directory, delete_file, remove_path, read_whole_line
+  public :: rename_file, file_exists, directory_exists, make_directory, delete_file, remove_path, read_whole_line, &
+            short_name_t, open_short_name, close_short_name
+
+  !> The longest path handed to the system: Linux's PATH_MAX is 4096 bytes with the terminating NUL.
+  !> Deck variables that hold a path are one character longer, so that a longer value is refused
+  !> by the deck checks rather than cut by the namelist read.
+  integer, parameter, public :: longest_path = 4095
+
+  !> Another name of a file for libraries that copy names into fixed buffers (Open MPI's MPI-IO):
+  !> /proc/self/fd/<descriptor>/<file name>, through a descriptor of the file's directory that stays
+  !> open until close_short_name (Linux). Where no such name can be made, path is the file's path.
+  type :: short_name_t
+    integer(c_int) :: descriptor = -1_c_int
+    character(len=:), allocatable :: path
+  end type short_name_t
 
   interface
     function c_rename(old_path, new_path) bind(C, name='rename') result(status)
@@ -27,6 +41,18 @@ module file_system
       character(kind=c_char), intent(in) :: path(*)
       integer(c_int) :: error
     end function c_remove_path
+
+    function c_open_directory(path) bind(C, name='agglo_open_directory') result(descriptor)
+      import :: c_int, c_char
+      character(kind=c_char), intent(in) :: path(*)
+      integer(c_int) :: descriptor
+    end function c_open_directory
+
+    function c_close_directory(descriptor) bind(C, name='agglo_close_directory') result(error)
+      import :: c_int
+      integer(c_int), value :: descriptor
+      integer(c_int) :: error
+    end function c_close_directory
 
     subroutine c_error_text(code, buffer, capacity) bind(C, name='agglo_error_text')
       import :: c_int, c_char
@@ -80,6 +106,33 @@ contains
     logical :: ok
     if (file_exists(path)) call remove_path(path, ok)
   end subroutine delete_file
+
+  !> A short name of the file path (short_name_t); the file itself need not exist yet.
+  subroutine open_short_name(path, short)
+    character(len=*), intent(in) :: path
+    type(short_name_t), intent(out) :: short
+    character(len=:), allocatable :: directory
+    character(len=16) :: number
+    integer :: slash
+    short%path = path
+    slash = index(path, '/', back=.true.)
+    if (slash == len(path) .or. .not. directory_exists('/proc/self/fd')) return
+    directory = '.'
+    if (slash > 1) directory = path(1:slash - 1)
+    if (slash == 1) directory = '/'
+    short%descriptor = c_open_directory(directory//c_null_char)
+    if (short%descriptor < 0_c_int) return
+    write(number, '(i0)') short%descriptor
+    short%path = '/proc/self/fd/'//trim(number)//'/'//path(slash + 1:)
+  end subroutine open_short_name
+
+  !> Release the directory descriptor of a short name (nothing happens if it holds none).
+  subroutine close_short_name(short)
+    type(short_name_t), intent(inout) :: short
+    integer(c_int) :: error
+    if (short%descriptor >= 0_c_int) error = c_close_directory(short%descriptor)
+    short%descriptor = -1_c_int
+  end subroutine close_short_name
 
   !> The system's text for an errno value ('' for 0).
   function error_text(code) result(text)

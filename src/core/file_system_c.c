@@ -1,11 +1,14 @@
 /* Directory and file operations for Fortran through system calls (standard Fortran has no
  * mkdir, rmdir or unlink). Paths are taken literally: no shell ever sees them. */
+#define _GNU_SOURCE   /* O_PATH */
 #include <errno.h>
+#include <fcntl.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <sys/types.h>
+#include <unistd.h>
 
 /* mkdir -p: creates `path` (NUL-terminated) and every missing parent with mode 0777 (less the
  * umask). Returns 0 when `path` is a directory afterwards, else the errno of the failing step. */
@@ -46,4 +49,21 @@ void agglo_error_text(int code, char *buffer, int capacity)
     if (capacity <= 0) return;
     strncpy(buffer, strerror(code), (size_t)capacity - 1);
     buffer[capacity - 1] = '\0';
+}
+
+/* Opens the directory `path` as a handle for names below it (O_PATH where the system has it:
+ * no read permission needed). Returns the descriptor, or -1 with nothing opened. */
+int agglo_open_directory(const char *path)
+{
+#ifdef O_PATH
+    return open(path, O_PATH | O_DIRECTORY | O_CLOEXEC);
+#else
+    return open(path, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+#endif
+}
+
+/* Closes a descriptor of agglo_open_directory. Returns 0 or errno. */
+int agglo_close_directory(int descriptor)
+{
+    return close(descriptor) == 0 ? 0 : errno;
 }

@@ -14,8 +14,9 @@ module flow_statistics_output
   use timer_registry, only: timer_tic, timer_toc
   use file_system, only: file_exists
   use parallel_env, only: any_rank
-  use hdf5_io, only: h5_file_t, h5_create, h5_open, h5_close, h5_exists, h5_append, h5_write_array, h5_read_array, &
-                     h5_truncate, h5_delete
+  use hdf5_files, only: h5_file_t, h5_create, h5_open, h5_close, h5_exists, h5_delete
+  use hdf5_datasets, only: h5_write_array, h5_read_array
+  use hdf5_series, only: h5_append, h5_truncate
   use fluid_solver, only: fluid_solver_t
   use flow_statistics, only: flow_statistics_t, compute_flow_statistics
   implicit none

@@ -1,6 +1,6 @@
 !> Fluid state in files: its group of a checkpoint (everything for a bit-for-bit continuation),
-!> field snapshots, and the initial field read from a file. Built on hdf5_io / checkpoint_files /
-!> field_output. All routines are collective.
+!> field snapshots, and the initial field read from a file. Built on hdf5_files / hdf5_datasets /
+!> checkpoint_files / field_output. All routines are collective.
 !>
 !> Checkpoint group 'fluid' (Fortran shapes): fluid/u, fluid/v, fluid/w, fluid/pressure,
 !> fluid/explicit_old_u|v|w (nx, ny, nz); fluid/grid_shape (3); fluid/box_length (3, m);
@@ -11,8 +11,8 @@ module fluid_restart
   use file_system, only: file_exists
   use parallel_env, only: all_ranks
   use text_format, only: int_text, real_text
-  use hdf5_io, only: h5_file_t, h5_open, h5_close, h5_exists, h5_write_slab, h5_read_slab, h5_write_array, &
-                     h5_read_array
+  use hdf5_files, only: h5_file_t, h5_open, h5_close, h5_exists
+  use hdf5_datasets, only: h5_read_scalar, h5_write_slab, h5_read_slab, h5_write_array, h5_read_array
   use checkpoint_files, only: checkpoint_t
   use field_output, only: field_snapshot_t, field_snapshot_begin, field_snapshot_add, field_snapshot_end, &
                           at_cell_centre, at_x_face, at_y_face, at_z_face
@@ -83,10 +83,10 @@ contains
       call read_interior(file, 'fluid/explicit_old_u', solver%explicit_old_u, solver)
       call read_interior(file, 'fluid/explicit_old_v', solver%explicit_old_v, solver)
       call read_interior(file, 'fluid/explicit_old_w', solver%explicit_old_w, solver)
-      call h5_read_array(file, 'fluid/time', solver%time)
-      call h5_read_array(file, 'fluid/dt_old', solver%dt_old)
-      call h5_read_array(file, 'fluid/step', solver%step)
-      call h5_read_array(file, 'fluid/has_history', flag)
+      call h5_read_scalar(file, 'fluid/time', solver%time)
+      call h5_read_scalar(file, 'fluid/dt_old', solver%dt_old)
+      call h5_read_scalar(file, 'fluid/step', solver%step)
+      call h5_read_scalar(file, 'fluid/has_history', flag)
     end associate
     solver%has_history = (flag == 1)
     call fluid_exchange_velocity(solver)

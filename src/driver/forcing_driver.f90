@@ -16,7 +16,8 @@ module forcing_driver
   use error_handling, only: fatal
   use run_directory, only: run_file
   use timer_registry, only: timer_tic, timer_toc
-  use hdf5_io, only: h5_file_t, h5_create, h5_open, h5_close, h5_exists, h5_write_array, h5_read_array
+  use hdf5_files, only: h5_file_t, h5_create, h5_open, h5_close, h5_exists
+  use hdf5_datasets, only: h5_write_array, h5_read_array
   use fluid_solver, only: fluid_solver_t, fluid_advance
   use fluid_restart, only: write_fluid_state
   use checkpoint_files, only: checkpoint_t

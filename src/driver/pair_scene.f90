@@ -22,7 +22,8 @@ module pair_scene
   use wall_clock, only: wall_time
   use progress_meter, only: progress_meter_t, progress_report, scientific_text
   use run_directory, only: run_file
-  use hdf5_io, only: h5_exists, h5_write_array, h5_read_array
+  use hdf5_files, only: h5_exists
+  use hdf5_datasets, only: h5_read_scalar, h5_write_array, h5_read_array
   use checkpoint_files, only: checkpoint_t, checkpoint_begin, checkpoint_commit, checkpoint_open_newest, checkpoint_close
   use particle_system_checkpoint, only: write_particle_system_checkpoint, read_particle_system_checkpoint
   use fluid_monitor, only: timing_report
@@ -224,11 +225,11 @@ contains
         ' holds no pair scene (group pair_scene): &run restart must continue a run of the same scene')
     call read_particle_system_checkpoint(restart, system)
     associate (file => restart%file)
-      call h5_read_array(file, 'pair_scene/time', loop%time)
-      call h5_read_array(file, 'pair_scene/step', loop%step)
-      call h5_read_array(file, 'pair_scene/max_vdw_force', loop%max_vdw_force)
-      call h5_read_array(file, 'pair_scene/collisions', summary%collisions)
-      call h5_read_array(file, 'pair_scene/has_first_collision', flag)
+      call h5_read_scalar(file, 'pair_scene/time', loop%time)
+      call h5_read_scalar(file, 'pair_scene/step', loop%step)
+      call h5_read_scalar(file, 'pair_scene/max_vdw_force', loop%max_vdw_force)
+      call h5_read_scalar(file, 'pair_scene/collisions', summary%collisions)
+      call h5_read_scalar(file, 'pair_scene/has_first_collision', flag)
       call h5_read_array(file, 'pair_scene/first_collision', first)
       call h5_read_array(file, 'pair_scene/first_collision_bodies', bodies)
       call h5_read_array(file, 'pair_scene/hydrodynamic_force', force)

@@ -10,7 +10,8 @@ module particle_system_checkpoint
   use agglo_kinds, only: i8
   use error_handling, only: fatal
   use text_format, only: int_text
-  use hdf5_io, only: h5_exists, h5_write_array, h5_read_array
+  use hdf5_files, only: h5_exists
+  use hdf5_datasets, only: h5_write_array, h5_read_array
   use checkpoint_files, only: checkpoint_t
   use particle_system, only: particle_system_t
   use particle_system_state, only: particle_system_state_t, particle_system_save, particle_system_restore

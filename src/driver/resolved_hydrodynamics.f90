@@ -77,7 +77,8 @@ module resolved_hydrodynamics
   use logger, only: log_line
   use text_format, only: real_text, int_text
   use checkpoint_files, only: checkpoint_t
-  use hdf5_io, only: h5_write_array, h5_read_array, h5_exists
+  use hdf5_files, only: h5_exists
+  use hdf5_datasets, only: h5_read_scalar, h5_write_array, h5_read_array
   use fluid_solver, only: fluid_solver_t
   use forcing_driver, only: forcing_driver_t, forcing_driver_evaluate, forcing_driver_advance
   use particle_system, only: particle_system_t, particle_loads_t
@@ -574,7 +575,7 @@ contains
       call h5_read_array(file, 'resolved_hydrodynamics/imposed_angular_velocity', self%imposed_angular_velocity)
       call h5_read_array(file, 'resolved_hydrodynamics/acceleration', self%acceleration)
       call h5_read_array(file, 'resolved_hydrodynamics/angular_acceleration', self%angular_acceleration)
-      call h5_read_array(file, 'resolved_hydrodynamics/dt', self%dt)
+      call h5_read_scalar(file, 'resolved_hydrodynamics/dt', self%dt)
       ! A checkpoint from before the history estimate has none: zero (explicit diffusion never uses it).
       if (h5_exists(file, 'resolved_hydrodynamics/earlier_acceleration')) then
         call h5_read_array(file, 'resolved_hydrodynamics/earlier_acceleration', flat)
@@ -588,7 +589,7 @@ contains
         call h5_read_array(file, 'resolved_hydrodynamics/start_angular_velocity', self%start_angular_velocity)
         call h5_read_array(file, 'resolved_hydrodynamics/start_change', self%start_change)
         call h5_read_array(file, 'resolved_hydrodynamics/start_angular_change', self%start_angular_change)
-        call h5_read_array(file, 'resolved_hydrodynamics/steps_since_start', self%steps_since_start)
+        call h5_read_scalar(file, 'resolved_hydrodynamics/steps_since_start', self%steps_since_start)
       end if
     end associate
     self%inject = .false.

@@ -13,7 +13,7 @@ module body_surface_output
   use agglo_kinds, only: wp
   use error_handling, only: fatal
   use text_format, only: int_text
-  use hdf5_io, only: h5_write_array
+  use hdf5_datasets, only: h5_write_array
   use spheroid, only: spheroid_t
   use quaternion, only: rotation_matrix
   use icosphere_mesh, only: icosphere_mesh_t, build_icosphere_mesh

@@ -15,7 +15,7 @@
 !> A checkpoint of step n is written to <run dir>/checkpoints/checkpoint_<n, 10 digits>.h5.tmp and
 !> renamed to .../checkpoint_<n>.h5 only after the file is complete and closed (rename() is atomic on
 !> one file system): a run killed while writing leaves at most a .tmp file, which is never read.
-!> Every dataset carries a Fletcher-32 checksum (hdf5_io, checksums = .true.), and the commit writes
+!> Every dataset carries a Fletcher-32 checksum (hdf5_files, checksums = .true.), and the commit writes
 !> checkpoint/step (the step, as in the name) and last checkpoint/complete = 1. On restart the
 !> newest file is verified (it opens, every dataset reads back with its checksum, its stored step
 !> is the one in its name and it is marked complete); a damaged one (truncated, zeroed, corrupted)
@@ -24,16 +24,17 @@
 !>
 !> Every routine here is collective (all ranks call it).
 module checkpoint_files
-  use mpi_f08, only: MPI_Bcast, MPI_INTEGER, MPI_CHARACTER, MPI_COMM_WORLD
   use agglo_kinds, only: i8
   use error_handling, only: fatal
   use logger, only: log_line
   use file_system, only: make_directory, delete_file
-  use parallel_env, only: is_root, barrier
+  use parallel_env, only: is_root, barrier, root_text
   use run_directory, only: run_directory_path, run_file, confirm_run_deck, forget_run_file, checkpoint_subdirectory
   use directory_listing, only: list_directory, name_length
   use field_output, only: discard_snapshots_after
-  use hdf5_io, only: h5_file_t, h5_create, h5_open, h5_close, h5_exists, h5_write_array, h5_read_array, h5_verify
+  use hdf5_files, only: h5_file_t, h5_create, h5_open, h5_close, h5_exists
+  use hdf5_datasets, only: h5_read_scalar, h5_write_array, h5_read_array
+  use hdf5_checks, only: h5_verify
   implicit none
   private
   public :: checkpoint_t, checkpoint_begin, checkpoint_commit, checkpoint_open_newest, checkpoint_open, &
@@ -140,7 +141,7 @@ contains
     character(len=*), intent(in) :: path
     checkpoint%path = path
     call h5_open(checkpoint%file, path, writable=.false.)
-    call h5_read_array(checkpoint%file, 'checkpoint/step', checkpoint%step)
+    call h5_read_scalar(checkpoint%file, 'checkpoint/step', checkpoint%step)
   end subroutine checkpoint_open
 
   !> End of a restart: every component has read its group. The field snapshots of later steps (an
@@ -225,8 +226,8 @@ contains
     if (.not. ok) then
       reason = 'not marked complete (no checkpoint/step and checkpoint/complete)'
     else
-      call h5_read_array(file, 'checkpoint/step', stored_step)
-      call h5_read_array(file, 'checkpoint/complete', complete)
+      call h5_read_scalar(file, 'checkpoint/step', stored_step)
+      call h5_read_scalar(file, 'checkpoint/complete', complete)
       write(text, '(i0)') stored_step
       if (stored_step /= step) then
         ok = .false.
@@ -245,17 +246,17 @@ contains
     character(len=:), allocatable :: path
     character(len=:), allocatable :: reason
     integer(i8), allocatable :: steps(:)
-    character(len=4096) :: shared
-    integer :: length, newest
+    character(len=:), allocatable :: found
+    integer :: newest
     logical :: ok
-    shared = ''
+    found = ''
     if (is_root()) then
       call checkpoint_steps(.false., steps)
       do while (size(steps) > 0)
         newest = maxloc(steps, 1)
         call checkpoint_is_valid(checkpoint_path(steps(newest)), steps(newest), ok, reason)
         if (ok) then
-          shared = checkpoint_path(steps(newest))
+          found = checkpoint_path(steps(newest))
           exit
         end if
         call log_line('agglo: warning: checkpoint '//checkpoint_path(steps(newest))//' is not usable ('// &
@@ -263,9 +264,6 @@ contains
         steps = [steps(:newest - 1), steps(newest + 1:)]
       end do
     end if
-    length = len_trim(shared)
-    call MPI_Bcast(length, 1, MPI_INTEGER, 0, MPI_COMM_WORLD)
-    call MPI_Bcast(shared, len(shared), MPI_CHARACTER, 0, MPI_COMM_WORLD)
-    path = shared(1:length)
+    path = root_text(found)
   end function newest_checkpoint
 end module checkpoint_files

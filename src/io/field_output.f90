@@ -40,8 +40,9 @@ module field_output
   use run_directory, only: run_directory_path, run_file, record_run_file, forget_run_file
   use logger, only: log_line
   use directory_listing, only: list_directory, name_length
-  use hdf5_io, only: h5_file_t, h5_create, h5_open, h5_close, h5_write_slab, h5_write_array, h5_read_array, &
-                     h5_write_string, h5_read_string, h5_exists, h5_dataset_shape
+  use hdf5_files, only: h5_file_t, h5_create, h5_open, h5_close, h5_exists
+  use hdf5_datasets, only: h5_read_scalar, h5_write_slab, h5_write_array, h5_read_array, h5_write_string, h5_read_string, &
+                           h5_dataset_shape
   implicit none
   private
   public :: field_snapshot_t, field_snapshot_begin, field_snapshot_add, field_snapshot_end, write_field_snapshot, &
@@ -309,7 +310,7 @@ contains
       records(n)%file_name = names(i)
       records(n)%step = step
       call h5_open(file, directory//'/'//trim(names(i)), writable=.false., serial=.true.)
-      call h5_read_array(file, 'time', records(n)%time)
+      call h5_read_scalar(file, 'time', records(n)%time)
       call read_int3(file, 'grid/shape', records(n)%global_shape)
       call read_real3(file, 'grid/lengths', records(n)%lengths)
       call h5_read_string(file, 'field_names', records(n)%names)

@@ -21,8 +21,9 @@ module particle_output
   use error_handling, only: fatal
   use file_system, only: rename_file
   use parallel_env, only: is_root
-  use hdf5_io, only: h5_file_t, h5_create, h5_open, h5_close, h5_flush, h5_append, h5_write_array, h5_write_string, &
-                     h5_dataset_names, h5_dataset_shape, h5_truncate, dataset_name_length
+  use hdf5_files, only: h5_file_t, h5_create, h5_open, h5_close, h5_flush, h5_dataset_names, dataset_name_length
+  use hdf5_datasets, only: h5_write_array, h5_write_string, h5_dataset_shape
+  use hdf5_series, only: h5_append, h5_truncate
   use json_writer, only: json_object_t, json_add, json_add_null, json_text
   implicit none
   private
@@ -37,7 +38,7 @@ module particle_output
 
   !> Identity of a pair run, written at the root of particles.h5.
   type :: pair_run_metadata_t
-    character(len=64) :: name = ''          !< run name (&run name)
+    character(len=256) :: name = ''         !< run name (&run name)
     character(len=16) :: shape = ''         !< 'sphere' | 'needle' | 'disk' | 'spheroid'
     real(wp) :: aspect_ratio = 1.0_wp       !< a/b of the spheroids
     real(wp) :: radius = 0.0_wp             !< m, volume-equivalent radius
@@ -84,7 +85,7 @@ module particle_output
 
   !> Contents of summary.json (docs/outputs.md).
   type :: run_summary_t
-    character(len=64) :: name = ''
+    character(len=256) :: name = ''
     integer(i8) :: seed = 0_i8
     character(len=16) :: shape = ''
     real(wp) :: aspect_ratio = 1.0_wp

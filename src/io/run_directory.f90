@@ -18,9 +18,8 @@ module run_directory
   use error_handling, only: fatal, input_error, input_error_text
   use text_format, only: int_text
   use parallel_env, only: is_root, barrier, root_text
-  use file_system, only: rename_file, file_exists, make_directory, remove_path
+  use file_system, only: rename_file, file_exists, make_directory, remove_path, longest_path
   use directory_listing, only: list_directory, name_length
-  use hdf5_io, only: longest_parallel_path
   implicit none
   private
   public :: prepare_run_directory, run_directory_path, run_file, record_run_file, confirm_run_deck, forget_run_file, &
@@ -28,8 +27,8 @@ module run_directory
 
   character(len=*), parameter :: manifest_name = 'agglo_manifest.txt'
   character(len=*), parameter :: checkpoint_subdirectory = 'checkpoints'
-  !> The longest name Agglo opens through MPI-IO inside the run directory.
-  character(len=*), parameter :: longest_parallel_name = '/checkpoints/checkpoint_0000000000.h5.tmp'
+  !> The longest name Agglo writes inside the run directory.
+  character(len=*), parameter :: longest_name = '/checkpoints/checkpoint_0000000000.h5.tmp'
 
   character(len=:), allocatable :: directory
   character(len=name_length), allocatable :: recorded(:)   !< the manifest (rank 0)
@@ -78,25 +77,14 @@ contains
     type(agglo_config_t), intent(in) :: cfg
     logical :: has_run
     character(len=:), allocatable :: problem
-    character(len=16) :: length_text
     directory = trim(cfg%output%directory)
     if (len(directory) == 0) directory = 'output/'//trim(cfg%run%name)
-    ! Open MPI's MPI-IO (4.1) overflows a fixed buffer and aborts for longer file paths
-    ! (hdf5_io, longest_parallel_path): refuse them before anything is written.
-    if (cfg%scene%fluid == 'resolved') then
-      if (len(directory) + len(longest_parallel_name) > longest_parallel_path) then
-        write(length_text, '(i0)') len(directory)
-        call input_error('output', 'directory', ''''//directory//''' ('//trim(length_text)//' characters)', &
-            'a path of at most '//int_text(longest_parallel_path - len(longest_parallel_name))// &
-            ' characters (the longest file path written through MPI-IO, <directory>'//longest_parallel_name// &
-            ', must stay within '//int_text(longest_parallel_path)//')')
-      end if
-      if (trim(cfg%fluid%init) == 'file' .and. len_trim(cfg%fluid%init_file) > longest_parallel_path) then
-        write(length_text, '(i0)') len_trim(cfg%fluid%init_file)
-        call input_error('fluid', 'init_file', ''''//trim(cfg%fluid%init_file)//''' ('//trim(length_text)// &
-            ' characters)', 'a path of at most '//int_text(longest_parallel_path)//' characters (read through MPI-IO)')
-      end if
-    end if
+    ! Every path Agglo writes must fit the system's limit: a directory too long for its longest
+    ! file is refused before anything is written.
+    if (len(directory) + len(longest_name) > longest_path) call input_error('output', 'directory', &
+        ''''//directory(1:40)//'...'' ('//int_text(len(directory))//' characters)', 'a path of at most '// &
+        int_text(longest_path - len(longest_name))//' characters (the longest file path written, <directory>'// &
+        longest_name//', must stay within the system''s limit of '//int_text(longest_path)//' characters, PATH_MAX)')
     problem = ''
     if (is_root()) problem = directory_problem(cfg, has_run)
     problem = root_text(problem)

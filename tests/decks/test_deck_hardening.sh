@@ -57,12 +57,12 @@ printf "&run name = 'p', dt = 1.0e-7\x00 /\n&scene fluid = 'none', particles = '
 expect_deck_file_error control_character 1 control.nml 'line 1 of control.nml: a control character (code 0)'
 
 # --- Values longer than their variable (a namelist read cuts them silently) ----------------------
-expect_error name_too_long "&run name = '$(repeat n 64)' /" '&run name' '(64 characters or more)' \
-  'at most 63 characters'
+expect_error name_too_long "&run name = '$(repeat n 256)' /" '&run name' '(256 characters or more)' \
+  'at most 255 characters'
 expect_error directory_too_long "$pair
-&output directory = '$(repeat d 300)' /" '&output directory' 'at most 255 characters'
+&output directory = '$(repeat d 4200)' /" '&output directory' 'at most 4095 characters'
 expect_error init_file_too_long "$fluid
-&fluid init = 'file', init_file = 'a/$(repeat f 260).h5' /" '&fluid init_file' 'at most 255 characters'
+&fluid init = 'file', init_file = 'a/$(repeat f 4100).h5' /" '&fluid init_file' 'at most 4095 characters'
 
 # --- Finite numbers only, in any real variable and any vector component --------------------------
 expect_error nan_dt "&run name = 'p', dt = NaN /

@@ -3,15 +3,15 @@
 # Run directories with $AGGLO (docs/outputs.md, "Run directory and manifest"), 2 ranks unless said:
 #  - no shell sees deck text: &output directory = 'out_$(touch x)' and a name with spaces, quotes,
 #    backquotes and non-ASCII letters are made literally, and no command runs;
-#  - the longest directory path the MPI-IO limit allows (179 characters) runs; one character more is
-#    refused by name before anything is written (Open MPI 4.1.4 aborts at file paths of 229);
 #  - the manifest lists every file the run wrote; overwrite deletes exactly those (a stale
 #    final_field.h5 of an earlier forced run included), never a user's fields_backup_mine.h5;
 #  - a refused restart (changed grid) leaves run.nml as it was;
 #  - after a CFL stop and a restart from the last checkpoint, the stop's field dump leaves the run and
 #    fields.xdmf lists only snapshots of the continued history;
 #  - &fluid init = 'file' and restart refuse a file whose box size differs from the deck's.
+# Long directory paths are tested in test_long_paths.sh.
 # Prints PASS/FAIL lines; works in a temporary directory.
+# checks: 8
 set -u
 AGGLO=${AGGLO:?AGGLO must be the agglo executable}
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
@@ -46,25 +46,6 @@ if run special.nml && [ ! -e y ] && [ -f "$special/run.nml" ] && [ -f "$special/
   echo "PASS run_directory/special_characters_literal  (spaces, quotes, backquotes, \$, non-ASCII)"
 else
   echo "FAIL run_directory/special_characters_literal: $(ls | tr '\n' '|'); $(tail -n 2 special.nml.out)"
-fi
-
-# --- long directory paths: the longest allowed runs, one more character is refused up front -------
-long=$(printf 'd%.0s' $(seq 1 179))
-deck "$long" > long_ok.nml
-if run long_ok.nml && [ -f "$long/checkpoints/checkpoint_0000000006.h5" ]; then
-  echo "PASS run_directory/longest_allowed_directory_runs  (179 characters: checkpoint path of 220)"
-else
-  echo "FAIL run_directory/longest_allowed_directory_runs: $(grep -m1 -E 'error|overflow' long_ok.nml.out)"
-fi
-rm -rf "$long"
-too_long=$(printf 'e%.0s' $(seq 1 180))
-deck "$too_long" > long_bad.nml
-run long_bad.nml; status=$?
-if [ $status -ne 0 ] && [ ! -e "$too_long" ] \
-   && grep -q "&output directory = '$too_long' (180 characters) is not allowed; allowed: a path of at most 179 characters" long_bad.nml.out; then
-  echo "PASS run_directory/too_long_directory_refused_before_writing  (exit $status, nothing created)"
-else
-  echo "FAIL run_directory/too_long_directory_refused_before_writing: exit $status; $(grep -m1 -E 'error|overflow' long_bad.nml.out | cut -c1-200)"
 fi
 
 # --- manifest and overwrite --------------------------------------------------------------------

@@ -14,8 +14,8 @@ program test_checkpoint_files
   use run_directory, only: prepare_run_directory
   use checkpoint_files, only: checkpoint_t, checkpoint_begin, checkpoint_commit, newest_checkpoint, checkpoint_path, &
                               checkpoint_open_newest, checkpoint_close, checkpoint_is_valid
-  use hdf5_io, only: h5_file_t, h5_create, h5_close, h5_write_array, h5_read_array, h5_write_slab, &
-                     h5_read_slab, h5_exists, hdf5_io_finalize
+  use hdf5_files, only: h5_file_t, h5_create, h5_close, h5_exists, h5_finalize
+  use hdf5_datasets, only: h5_read_scalar, h5_write_array, h5_read_array, h5_write_slab, h5_read_slab
   use file_system, only: file_exists, rename_file, delete_file
   use parallel_env, only: parallel_start, my_rank, n_ranks, barrier, is_root
   use test_framework, only: test_start, test_finish, check
@@ -59,7 +59,7 @@ program test_checkpoint_files
 
   ! The restart transaction: each component reads its own group back (bit for bit).
   call checkpoint_open_newest(checkpoint)
-  call h5_read_array(checkpoint%file, 'component_a/step', step)
+  call h5_read_scalar(checkpoint%file, 'component_a/step', step)
   call h5_read_slab(checkpoint%file, 'component_b/u', back, 2 * my_rank, [4, 3, 2 * n_ranks])
   call check(checkpoint%step == 20_i8 .and. step == 20_i8 .and. all(back == field), 'transaction_groups_read_back')
   call check(h5_exists(checkpoint%file, 'checkpoint/complete'), 'commit_marks_complete')
@@ -138,7 +138,7 @@ program test_checkpoint_files
 
   call barrier()
   if (my_rank == 0) call execute_command_line('rm -rf test_checkpoint_files_run', exitstat=status)
-  call hdf5_io_finalize()
+  call h5_finalize()
   call test_finish()
 
 contains

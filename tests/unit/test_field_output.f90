@@ -11,7 +11,8 @@ program test_field_output
   use run_directory, only: prepare_run_directory, run_file
   use field_output, only: field_snapshot_t, field_snapshot_begin, field_snapshot_add, field_snapshot_end, &
                           write_field_snapshot, at_cell_centre, at_x_face, at_z_face
-  use hdf5_io, only: h5_file_t, h5_open, h5_close, h5_read_slab, h5_read_array, h5_read_string, hdf5_io_finalize
+  use hdf5_files, only: h5_file_t, h5_open, h5_close, h5_finalize
+  use hdf5_datasets, only: h5_read_scalar, h5_read_slab, h5_read_array, h5_read_string
   use file_system, only: file_exists
   use parallel_env, only: parallel_start, my_rank, n_ranks, barrier, is_root
   use test_framework, only: test_start, test_finish, check
@@ -76,7 +77,7 @@ program test_field_output
   same = all(back(:, :, z_offset + 1:z_offset + nz_local) == u)
   call h5_read_slab(file, 'fields/p', back, 0, [nx, ny, nz])
   same = same .and. all(back(:, :, z_offset + 1:z_offset + nz_local) == 2 * p)
-  call h5_read_array(file, 'time', time)
+  call h5_read_scalar(file, 'time', time)
   call h5_read_string(file, 'field_names', names)
   call h5_close(file)
   call check(same, 'snapshot_fields_bit_exact')
@@ -97,7 +98,7 @@ program test_field_output
     call execute_command_line('rm -rf test_field_output_run check_fields_xdmf.py', exitstat=status)
   end if
   call barrier()
-  call hdf5_io_finalize()
+  call h5_finalize()
   call test_finish()
 
 contains

@@ -1,15 +1,17 @@
 ! ranks: 2
-! checks: 32
-!> Unit tests of hdf5_io on 2 ranks: a z-decomposed field written collectively and read back bit for
-!> bit on the same and on another decomposition (whole array on every rank, uneven split), scalars,
-!> arrays and strings round trip, nested groups, extendible datasets, serial files on one rank.
+! checks: 33
+!> Unit tests of the HDF5 layer (hdf5_files, hdf5_datasets, hdf5_series) on 2 ranks: a z-decomposed
+!> field written collectively and read back bit for bit on the same and on another decomposition
+!> (whole array on every rank, uneven split), scalars, arrays and strings round trip, nested groups,
+!> extendible datasets, serial files on one rank.
 !> Reference: the written values themselves (HDF5 stores IEEE doubles unchanged: exact equality).
 program test_hdf5_io
   use agglo_kinds, only: wp, i8
   use hdf5, only: hsize_t
-  use hdf5_io, only: h5_file_t, h5_create, h5_open, h5_close, h5_exists, h5_write_slab, h5_read_slab, &
-                     h5_write_array, h5_read_array, h5_write_string, h5_read_string, h5_append, &
-                     h5_truncate, h5_delete, h5_dataset_shape, hdf5_io_finalize
+  use hdf5_files, only: h5_file_t, h5_create, h5_open, h5_close, h5_exists, h5_delete, h5_finalize
+  use hdf5_datasets, only: h5_read_scalar, h5_write_slab, h5_read_slab, h5_write_array, h5_read_array, h5_write_string, &
+                           h5_read_string, h5_dataset_shape
+  use hdf5_series, only: h5_append, h5_truncate
   use parallel_env, only: parallel_start, my_rank, n_ranks, barrier, is_root
   use file_system, only: delete_file
   use test_framework, only: test_start, test_finish, check, check_equal
@@ -18,7 +20,7 @@ program test_hdf5_io
   character(len=*), parameter :: path = 'test_hdf5_io.h5', serial_path = 'test_hdf5_io_serial.h5'
   type(h5_file_t) :: file
   real(wp), allocatable :: local(:,:,:), whole(:,:,:), back(:,:,:), reals(:), table(:,:)
-  integer, allocatable :: ints(:)
+  integer, allocatable :: ints(:), cube(:,:,:)
   integer(i8), allocatable :: longs(:)
   integer(hsize_t), allocatable :: dims(:)
   character(len=:), allocatable :: text
@@ -54,6 +56,7 @@ program test_hdf5_io
   call h5_write_array(file, 'deep/a/ints', [3, -4, 5, 6])
   call h5_write_array(file, 'deep/rng', [huge(1_i8), -7_i8])
   call h5_write_array(file, 'table', reshape([(real(i, wp), i = 1, 6)], [3, 2]))
+  call h5_write_array(file, 'cube', reshape([(i, i = 1, 24)], [2, 3, 4]))   ! any rank, any type
   ! Rank 0's values are written whatever the other ranks pass.
   call h5_write_array(file, 'root_value', real(my_rank + 7, wp))
   call h5_write_array(file, 'empty', [integer ::])
@@ -91,11 +94,11 @@ program test_hdf5_io
   call check(same, 'slab_read_with_an_empty_rank')
   deallocate(back)
 
-  call h5_read_array(file, 'time', x)
+  call h5_read_scalar(file, 'time', x)
   call check(x == 1.25_wp, 'real_scalar_round_trip')
-  call h5_read_array(file, 'step', n)
+  call h5_read_scalar(file, 'step', n)
   call check_equal(n, 42, 'int_scalar_round_trip')
-  call h5_read_array(file, 'step_i8', long)
+  call h5_read_scalar(file, 'step_i8', long)
   call check(long == 12345678901_i8, 'i8_scalar_round_trip')
   call h5_read_array(file, 'deep/a/b/reals', reals)
   call check(size(reals) == 3, 'real_array_size')
@@ -107,7 +110,10 @@ program test_hdf5_io
   call h5_read_array(file, 'table', table)
   call check(all(shape(table) == [3, 2]) .and. table(3, 2) == 6.0_wp .and. table(1, 2) == 4.0_wp, &
              'real_2d_round_trip_fortran_order')
-  call h5_read_array(file, 'root_value', x)
+  call h5_read_array(file, 'cube', cube)
+  call check(all(shape(cube) == [2, 3, 4]) .and. all(cube == reshape([(i, i = 1, 24)], [2, 3, 4])), &
+             'int_3d_round_trip_fortran_order')
+  call h5_read_scalar(file, 'root_value', x)
   call check(x == 7.0_wp, 'root_values_written_every_rank_reads', 'rank 0 wrote 7')
   call h5_read_array(file, 'empty', ints)
   call check(size(ints) == 0, 'empty_array_round_trip')
@@ -189,7 +195,7 @@ program test_hdf5_io
     call h5_open(file, serial_path, writable=.false., serial=.true.)
     call h5_read_array(file, 'time', reals)
     call h5_read_string(file, 'shape', text)
-    call h5_read_array(file, 'seed', long)
+    call h5_read_scalar(file, 'seed', long)
     call h5_close(file)
     same = all(reals == [2.0_wp, 3.0_wp]) .and. text == 'disk' .and. long == 11_i8
     call delete_file(serial_path)
@@ -198,6 +204,6 @@ program test_hdf5_io
   call barrier()
   if (is_root()) call delete_file(path)
 
-  call hdf5_io_finalize()
+  call h5_finalize()
   call test_finish()
 end program test_hdf5_io

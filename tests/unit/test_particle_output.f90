@@ -14,8 +14,8 @@ program test_particle_output
                              collision_event_t, run_summary_t, particle_output_open, particle_output_close, &
                              particle_output_flush, append_pair_sample, append_collision_event, sample_value, &
                              sample_end, write_summary_json
-  use hdf5_io, only: h5_file_t, h5_open, h5_close, h5_read_array, h5_read_string, h5_dataset_shape, h5_exists, &
-                     hdf5_io_finalize
+  use hdf5_files, only: h5_file_t, h5_open, h5_close, h5_exists, h5_finalize
+  use hdf5_datasets, only: h5_read_scalar, h5_read_array, h5_read_string, h5_dataset_shape
   use hdf5, only: hsize_t
   use file_system, only: file_exists, delete_file
   use parallel_env, only: parallel_start, is_root, barrier
@@ -92,8 +92,8 @@ program test_particle_output
     call check(all(column == written_events%theta1), 'event_angles_round_trip')
     call h5_read_string(file, 'shape', text)
     call check(text == 'needle', 'root_shape_string', text)
-    call h5_read_array(file, 'seed', seed)
-    call h5_read_array(file, 'radius', radius)
+    call h5_read_scalar(file, 'seed', seed)
+    call h5_read_scalar(file, 'radius', radius)
     call check(seed == 1234567890123_i8 .and. radius == 50.0e-6_wp, 'root_seed_and_radius')
     call h5_close(file)
     ! Seen from outside: h5dump reports the h5py shape (N, 3).
@@ -172,7 +172,7 @@ program test_particle_output
     call delete_file('test_particles_generic.h5')
   end if
   call barrier()
-  call hdf5_io_finalize()
+  call h5_finalize()
   call test_finish()
 
 contains

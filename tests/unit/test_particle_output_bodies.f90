@@ -7,7 +7,8 @@ program test_particle_output_bodies
   use particle_output, only: particle_output_t, pair_run_metadata_t, particle_record_t, pair_record_t, &
                              collision_event_t, particle_output_open, particle_output_close, &
                              append_particles_sample, append_collision_event
-  use hdf5_io, only: h5_file_t, h5_open, h5_close, h5_read_array, h5_exists, hdf5_io_finalize
+  use hdf5_files, only: h5_file_t, h5_open, h5_close, h5_exists, h5_finalize
+  use hdf5_datasets, only: h5_read_scalar, h5_read_array
   use file_system, only: delete_file
   use parallel_env, only: parallel_start, is_root, barrier
   use test_framework, only: test_start, test_finish, check
@@ -44,7 +45,7 @@ program test_particle_output_bodies
     call h5_read_array(file, 'pair1_3/gap', column)
     call check(size(column) == 2 .and. column(1) == 13.0e-9_wp, 'pair_group_per_pair')
     call check(h5_exists(file, 'pair2_3/vdw_force') .and. .not. h5_exists(file, 'pair'), 'no_pair_group_for_three')
-    call h5_read_array(file, 'bodies', bodies)
+    call h5_read_scalar(file, 'bodies', bodies)
     call check(bodies == 3_i8, 'bodies_written')
     call h5_read_array(file, 'events/second', column)
     call check(size(column) == 1 .and. column(1) == 3.0_wp, 'event_bodies')
@@ -58,6 +59,6 @@ program test_particle_output_bodies
     call delete_file('test_bodies_pair.h5')
   end if
   call barrier()
-  call hdf5_io_finalize()
+  call h5_finalize()
   call test_finish()
 end program test_particle_output_bodies

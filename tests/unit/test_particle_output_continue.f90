@@ -1,5 +1,5 @@
 !> Unit tests of particle_output_continue (a restarted pair scene continuing particles.h5) and of
-!> hdf5_io's h5_dataset_names: a file with 5 samples and 3 events, continued from 3 samples and
+!> hdf5_files' h5_dataset_names: a file with 5 samples and 3 events, continued from 3 samples and
 !> 1 event, then 2 samples and 1 event appended, holds exactly the kept rows followed by the new
 !> ones, with the run identity untouched; the row counts carry on from the kept ones. 2 ranks (only
 !> rank 0 writes). Reference: the values the test wrote (sample k has time k, event k time 10 k).
@@ -11,8 +11,8 @@ program test_particle_output_continue
                              collision_event_t, particle_output_open, particle_output_continue, &
                              particle_output_close, particle_output_flush, particle_output_rows, &
                              append_particles_sample, append_collision_event
-  use hdf5_io, only: h5_file_t, h5_open, h5_close, h5_read_array, h5_read_string, h5_dataset_names, &
-                     dataset_name_length, hdf5_io_finalize
+  use hdf5_files, only: h5_file_t, h5_open, h5_close, h5_dataset_names, dataset_name_length, h5_finalize
+  use hdf5_datasets, only: h5_read_array, h5_read_string
   use file_system, only: delete_file
   use parallel_env, only: parallel_start, is_root, barrier
   use test_framework, only: test_start, test_finish, check
@@ -72,7 +72,7 @@ program test_particle_output_continue
     call delete_file(path)
   end if
   call barrier()
-  call hdf5_io_finalize()
+  call h5_finalize()
   call test_finish()
 
 contains

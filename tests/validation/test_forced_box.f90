@@ -23,7 +23,8 @@ program test_forced_box
   use config_fluid, only: fluid_config_t
   use fluid_solver, only: fluid_solver_t, fluid_solver_create, fluid_advance
   use flow_statistics, only: flow_statistics_t, compute_flow_statistics
-  use hdf5_io, only: h5_file_t, h5_create, h5_open, h5_close, h5_exists, h5_write_slab, hdf5_io_finalize
+  use hdf5_files, only: h5_file_t, h5_create, h5_open, h5_close, h5_exists, h5_finalize
+  use hdf5_datasets, only: h5_write_slab
   use parallel_env, only: parallel_start, is_root, global_max
   use test_framework, only: test_start, test_finish, check, check_close
   implicit none
@@ -47,7 +48,7 @@ program test_forced_box
   else
     call power_balance_and_restart()
   end if
-  call hdf5_io_finalize()
+  call h5_finalize()
   call test_finish()
 
 contains

@@ -11,7 +11,7 @@ program bench_fluid
   use parallel_env, only: parallel_start, parallel_stop, n_ranks, is_root, barrier, global_max
   use wall_clock, only: wall_time
   use file_system, only: make_directory
-  use hdf5_io, only: hdf5_io_finalize
+  use hdf5_files, only: h5_finalize
   use field_output, only: field_snapshot_t, field_snapshot_begin, field_snapshot_add, field_snapshot_end, &
                           at_x_face, at_y_face, at_z_face, at_cell_centre
   use poisson_fft, only: poisson_solve, poisson_solve_in_buffer, fft_round_trip
@@ -88,7 +88,7 @@ program bench_fluid
     write(unit, '(a)') (trim(lines(s)), s = 1, size(lines))
     close(unit)
   end if
-  call hdf5_io_finalize()
+  call h5_finalize()
   call parallel_stop()
 
 contains
