@@ -19,6 +19,7 @@ module pair_scene
   use error_handling, only: fatal
   use timer_registry, only: timer_register, timer_tic, timer_toc
   use logger, only: log_line
+  use text_format, only: int_text, real_text
   use wall_clock, only: wall_time
   use progress_meter, only: progress_meter_t, progress_report, scientific_text
   use run_directory, only: run_file
@@ -141,6 +142,9 @@ contains
     call write_summary_json(run_file('summary.json'), summary)
     call timing_report(loop%step - first_step, wall_time() - wall_start)
     call log_line('pair scene: outcome '//trim(summary%outcome)//'; particles.h5 and summary.json written')
+    if (loop%step >= cfg%run%max_steps .and. loop%time < loop%end_time * (1.0_wp - 1.0e-12_wp)) &
+      call log_line('pair scene: stopped by &run max_steps = '//int_text(cfg%run%max_steps)//' at t = '// &
+                    real_text(loop%time)//' s, before the end time '//real_text(loop%end_time)//' s')
   end subroutine run_pair_scene
 
   !> One checkpoint transaction: the particle system's group and the scene's own (group pair_scene:

@@ -2,13 +2,14 @@
 # Decks that ran for ever or changed the case without a word, and the limits that refuse them
 # (docs/decks.md, &run dt, &pair centre_position, &bodies centre, &fluid init_file):
 #  - a step count to end_time beyond max(&run max_steps, 1e9) (dt = 1e-300 s ran until max_steps,
-#    10^9 steps); the limit itself, and a smaller max_steps set on purpose, are accepted;
+#    10^9 steps); the limit itself, and a smaller max_steps set on purpose, are accepted, and a
+#    pair scene stopped by max_steps before its end time says so in its log;
 #  - a pair centre or a body centre outside the periodic box (it was wrapped); a pair centre of a
 #    scene without a box is not bounded;
 #  - a field file that does not say its box size: refused with the command that adds it, and that
 #    command makes the file usable (the run starts from the file's own field).
 # Refusals: non-zero exit and the message naming the group, the variable, the value and the range.
-# checks: 17
+# checks: 18
 set -u
 AGGLO=${AGGLO:?AGGLO must point to the built executable}
 here=$(cd "$(dirname "$0")" && pwd)
@@ -46,6 +47,17 @@ accepted steps_at_limit "&run name = 'p', dt = 1.0e-9, end_time = 1.0 /
 $pair"
 accepted max_steps_stops_first "&run name = 'f', dt = 1.0e-8, end_time = 1.0, max_steps = 5 /
 $fluid"
+
+# A pair scene stopped by max_steps before its end time runs (the limit is 1e9 steps) and says so.
+printf '%s\n' "&run name = 'cut', dt = 1.0e-7, end_time = 1.0e-2, max_steps = 50, progress_interval = 20 /" \
+  "&scene fluid = 'stokes', particles = 'pair' /" "&output directory = 'cut' /" > cut.nml
+if "$AGGLO" cut.nml > cut.out 2>&1 \
+   && grep -q 'pair scene: stopped by &run max_steps = 50 at t = 5.00000E-06 s, before the end time 1.00000E-02 s' cut.out \
+   && grep -q '"steps": 50,' cut/summary.json; then
+  echo "PASS pair_scene_stopped_by_max_steps_says_so  ($(grep -m1 'stopped by' cut.out))"
+else
+  echo "FAIL pair_scene_stopped_by_max_steps_says_so: $(grep -m1 -e 'agglo: error' -e 'stopped by' cut.out)"
+fi
 
 # --- Positions in the periodic box --------------------------------------------------------------
 resolved_pair="&run name = 'rp', dt = 1.0e-6, end_time = 1.0e-5 /
