@@ -109,7 +109,7 @@ contains
       end select
       call require_nonnegative('bodies', 'oscillation_frequency'//index, cfg%oscillation_frequency(n))
       if (.not. all(abs(cfg%centre(:, n)) < huge(1.0_wp))) call input_error('bodies', 'centre(:, '//int_text(n)//')', &
-          'not finite', 'finite positions (m; any periodic image)')
+          'not finite', 'finite positions (m, in the box of &grid)')
     end do
     call require_range('bodies', 'ghost_tolerance', cfg%ghost_tolerance, 1.0e-15_wp, 1.0e-3_wp)
     if (cfg%max_sweeps < 1 .or. cfg%max_sweeps > 10000) call input_error('bodies', 'max_sweeps', &

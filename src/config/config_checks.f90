@@ -21,7 +21,37 @@ contains
     if (cfg%scene%forcing /= 'none') call check_forcing_cross(cfg)
     if (cfg%scene%particles == 'pair') call check_particle_cross(cfg)
     if (cfg%scene%particles == 'pair' .and. cfg%scene%fluid == 'resolved') call check_pair_in_box(cfg)
+    if (cfg%scene%particles == 'prescribed' .and. cfg%scene%fluid == 'resolved') call check_bodies_in_box(cfg)
   end subroutine check_cross_groups
+
+  !> A position given in a deck must lie in the periodic box of &grid, 0 <= x_d <= L_d: one outside
+  !> would be wrapped to another place than the one written (a typo or a deck made for another box).
+  subroutine require_in_box(group, variable, position, cfg)
+    character(len=*), intent(in) :: group, variable
+    real(wp), intent(in) :: position(3)
+    type(agglo_config_t), intent(in) :: cfg
+    real(wp) :: box(3)
+    integer :: d
+    character(len=1), parameter :: axis(3) = ['x', 'y', 'z']
+    box = [cfg%grid%length_x, cfg%grid%length_y, cfg%grid%length_z]
+    do d = 1, 3
+      if (position(d) >= 0.0_wp .and. position(d) <= box(d)) cycle
+      call input_error(group, variable, real_text(position(1))//', '//real_text(position(2))//', '// &
+          real_text(position(3)), 'a position in the periodic box of &grid: 0 <= x <= length_x = '// &
+          real_text(box(1))//' m, 0 <= y <= length_y = '//real_text(box(2))//' m, 0 <= z <= length_z = '// &
+          real_text(box(3))//' m ('//axis(d)//' = '//real_text(position(d))//' m is outside; a position '// &
+          'outside is not wrapped: give its image in the box)')
+    end do
+  end subroutine require_in_box
+
+  !> Bodies in prescribed motion: each centre at t = 0 in the box (they may leave it later, moving).
+  subroutine check_bodies_in_box(cfg)
+    type(agglo_config_t), intent(in) :: cfg
+    integer :: n
+    do n = 1, cfg%bodies%count
+      call require_in_box('bodies', 'centre(:, '//int_text(n)//')', cfg%bodies%centre(:, n), cfg)
+    end do
+  end subroutine check_bodies_in_box
 
   !> Every variable of every group, whether the scene uses it or not, through the configuration's own
   !> namelist output (so no variable can be left out): each number finite (a NaN passes every
@@ -125,7 +155,8 @@ contains
                        'particles are not stable with the lagged loads, docs/studies/validation.md "Free particles")')
   end subroutine check_resolved_pair_cross
 
-  !> The pair in the resolved fluid's periodic box: body 2's minimum image must be the one next to body 1.
+  !> The pair in the resolved fluid's periodic box: a given pair centre in the box; body 2's minimum
+  !> image must be the one next to body 1.
   subroutine check_pair_in_box(cfg)
     type(agglo_config_t), intent(in) :: cfg
     real(wp) :: reach, smallest
@@ -140,6 +171,8 @@ contains
         real_text(cfg%pair%radius), 'a pair whose centres, 2 x the longest semi-axis ('//real_text(reach)// &
         ' m) plus the gap apart, are less than half the smallest box length ('//real_text(smallest)// &
         ' m) apart (the minimum-image convention of the periodic box)')
+    ! Then where it is (a pair too large for the box is the more basic error).
+    if (cfg%pair%centre == 'given') call require_in_box('pair', 'centre_position', cfg%pair%centre_position, cfg)
   end subroutine check_pair_in_box
 
   !> Bodies in prescribed motion: resolved fluid (either viscous scheme: with Crank-Nicolson the

@@ -1,12 +1,17 @@
 !> Namelist group &run: run identity, random seed, restart, time span and time step.
 module config_run
-  use agglo_kinds, only: wp
+  use agglo_kinds, only: wp, i8
   use deck_file, only: deck_t, check_namelist_read, require_positive, require_positive_int, &
-                       require_option, require_range, real_text
+                       require_option, require_range, real_text, int_text
   use error_handling, only: input_error
   implicit none
   private
-  public :: run_config_t, read_run_group, check_run_group, write_run_group
+  public :: run_config_t, read_run_group, check_run_group, write_run_group, step_count_limit
+
+  !> Steps a run may need to reach end_time with the default max_steps: beyond it a run cannot end in
+  !> any useful wall time (1e9 steps at 0.1 ms each are 28 hours on the smallest grid), so such a
+  !> deck is an error (a dt or end_time typed wrong), not a run to start.
+  real(wp), parameter :: largest_step_count = 1.0e9_wp
 
   type :: run_config_t
     character(len=256) :: name = 'agglo'         !< run name, written into every output (NAME_MAX 255)
@@ -72,7 +77,33 @@ contains
     if (cfg%cfl_target > cfg%cfl_limit) call input_error('run', 'cfl_target', real_text(cfg%cfl_target), &
         '<= cfl_limit = '//real_text(cfg%cfl_limit))
     call require_positive_int('run', 'progress_interval', cfg%progress_interval)
+    call check_step_count(cfg)
   end subroutine check_run_group
+
+  !> The most steps a run may need to reach end_time: max_steps, or 1e9 if that is more. A run
+  !> stopped by a smaller max_steps on purpose is a run of that many steps and may have a later
+  !> end_time (a restart continues it), but not one a billion steps away.
+  pure real(wp) function step_count_limit(cfg)
+    type(run_config_t), intent(in) :: cfg
+    step_count_limit = max(real(cfg%max_steps, wp), largest_step_count)
+  end function step_count_limit
+
+  !> end_time / dt, the fewest steps to end_time (with dt_mode = 'cfl' dt is the largest step, so
+  !> the run takes at least that many), must be within step_count_limit: a dt of 1e-300 s would
+  !> otherwise run until max_steps without getting anywhere. The relative slack of 1e-9 lets
+  !> end_time = 1, dt = 1e-9 (10^9 steps up to round-off) through.
+  subroutine check_step_count(cfg)
+    type(run_config_t), intent(in) :: cfg
+    real(wp) :: steps
+    character(len=:), allocatable :: fewest
+    steps = cfg%end_time / cfg%dt
+    if (.not. (steps > step_count_limit(cfg) * (1.0_wp + 1.0e-9_wp))) return
+    fewest = 'end_time / dt = '//real_text(steps)//' steps'
+    if (cfg%dt_mode == 'cfl') fewest = fewest//' at least (with dt_mode = ''cfl'' dt is the largest step)'
+    call input_error('run', 'dt', real_text(cfg%dt), 'a step that reaches end_time = '//real_text(cfg%end_time)// &
+        ' s within '//int_text(int(step_count_limit(cfg), i8))//' steps, max(max_steps, 1e9); '//fewest// &
+        ' (raise dt or lower end_time)')
+  end subroutine check_step_count
 
   !> The resolved group, as a namelist (for the log and the run directory).
   subroutine write_run_group(unit, cfg)

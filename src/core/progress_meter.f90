@@ -9,7 +9,8 @@
 !> weight on the latest interval (an interval k reports old weighs 2^-(k+1)), so after a change of
 !> dt the estimate settles within a few reports. The time left is (simulated time left) x (wall
 !> seconds per simulated second), or the steps left to a step limit x (wall seconds per step) if
-!> that is sooner.
+!> that is sooner. An estimate of 1000 days or more is shown as "ETA > 1000 days", none before the
+!> first measurement as "ETA unknown".
 module progress_meter
   use agglo_kinds, only: wp, i8
   use wall_clock, only: format_duration
@@ -30,8 +31,9 @@ module progress_meter
 
   !> Weight of the latest interval in the running averages.
   real(wp), parameter :: latest_weight = 0.5_wp
-  !> An estimate beyond about three years is shown as that (the duration is printed from an integer).
-  real(wp), parameter :: longest_eta = 1.0e8_wp
+  !> Beyond 1000 days an estimate says nothing a user can act on (and the duration is printed from
+  !> an integer): the line shows "ETA > 1000 days" instead of a number.
+  real(wp), parameter :: longest_eta = 1000 * 86400.0_wp
 
 contains
 
@@ -52,8 +54,10 @@ contains
     line = 'step '//int_text(step)//'  t = '//scientific_text(time)//' s  dt = '//scientific_text(dt)//' s'
     if (present(detail)) line = line//detail
     line = line//'  '//per_step_text(meter%last_seconds_per_step)//'  ETA '
-    if (eta >= 0.0_wp) then
-      line = line//trim(format_duration(min(eta, longest_eta)))
+    if (eta >= longest_eta) then
+      line = line//'> 1000 days'
+    else if (eta >= 0.0_wp) then
+      line = line//trim(format_duration(eta))
     else
       line = line//'unknown'
     end if

@@ -10,7 +10,7 @@ module fluid_restart
   use error_handling, only: fatal, input_error
   use file_system, only: file_exists
   use parallel_env, only: all_ranks
-  use text_format, only: int_text, real_text
+  use text_format, only: int_text, real_text, exact_real_text
   use hdf5_files, only: h5_file_t, h5_open, h5_close, h5_exists
   use hdf5_datasets, only: h5_read_scalar, h5_write_slab, h5_read_slab, h5_write_array, h5_read_array
   use checkpoint_files, only: checkpoint_t
@@ -146,7 +146,10 @@ contains
     real(wp) :: deck(3)
     deck = [solver%grid%lx, solver%grid%ly, solver%grid%lz]
     if (.not. h5_exists(file, name)) call fatal('file '//trim(path)//' does not say its box size ('//name// &
-        ' is missing: written by an older Agglo?), so it cannot be checked against the deck''s &grid')
+        ' is missing: written by an older Agglo?), so it cannot be checked against the deck''s &grid. If it was '// &
+        'written in the box of this deck, add that box to the file with the repository''s tools/add-box-size '''// &
+        trim(path)//''' --box '//exact_real_text(deck(1))//' '//exact_real_text(deck(2))//' '// &
+        exact_real_text(deck(3))//' (docs/decks.md, &fluid init_file)')
     call h5_read_array(file, name, stored)
     if (size(stored) /= 3) call fatal('file '//trim(path)//': '//name//' is not a 3-vector')
     if (any(abs(stored - deck) > box_tolerance * abs(deck))) call fatal('file '//trim(path)// &

@@ -19,6 +19,7 @@ module pair_scene
   use error_handling, only: fatal
   use timer_registry, only: timer_register, timer_tic, timer_toc
   use logger, only: log_line
+  use text_format, only: int_text, real_text
   use wall_clock, only: wall_time
   use progress_meter, only: progress_meter_t, progress_report, scientific_text
   use run_directory, only: run_file
@@ -118,7 +119,8 @@ contains
         if (sampled(cfg, loop%step) .or. finished) &
           call write_sample(output, loop%time, system, hydrodynamic)
         if (loop%step > first_step .and. (mod(loop%step, int(cfg%run%progress_interval, i8)) == 0 .or. finished)) &
-          call progress_line(loop%step - first_step, loop, dt, system, wall_time() - wall_start)
+          call progress_line(loop%step - first_step, loop, dt, system, wall_time() - wall_start, &
+                           cfg%run%max_steps)
         if (.not. finished .and. loop%step > first_step .and. cfg%output%checkpoint_interval > 0) then
           if (mod(loop%step, int(cfg%output%checkpoint_interval, i8)) == 0) &
             call checkpoint_pair_scene(cfg, system, loop, summary, hydrodynamic, output, last=.false.)
@@ -141,6 +143,9 @@ contains
     call write_summary_json(run_file('summary.json'), summary)
     call timing_report(loop%step - first_step, wall_time() - wall_start)
     call log_line('pair scene: outcome '//trim(summary%outcome)//'; particles.h5 and summary.json written')
+    if (loop%step >= cfg%run%max_steps .and. loop%time < loop%end_time * (1.0_wp - 1.0e-12_wp)) &
+      call log_line('pair scene: stopped by &run max_steps = '//int_text(cfg%run%max_steps)//' at t = '// &
+                    real_text(loop%time)//' s, before the end time '//real_text(loop%end_time)//' s')
   end subroutine run_pair_scene
 
   !> One checkpoint transaction: the particle system's group and the scene's own (group pair_scene:
@@ -414,15 +419,17 @@ contains
   end function normal_approach_speed
 
   !> The progress line (core progress_meter) with the pair's gap and normal approach speed;
-  !> steps_taken: steps of this run segment (since the start or the restart), for the speed.
-  subroutine progress_line(steps_taken, loop, dt, system, elapsed)
+  !> steps_taken: steps of this run segment (since the start or the restart), for the speed;
+  !> max_steps: &run max_steps, for the ETA when the run stops there before its end time.
+  subroutine progress_line(steps_taken, loop, dt, system, elapsed, max_steps)
     integer(i8), intent(in) :: steps_taken
     type(pair_loop_t), intent(in) :: loop
     real(wp), intent(in) :: dt, elapsed
     type(particle_system_t), intent(in) :: system
+    integer, intent(in) :: max_steps
     type(progress_meter_t), save :: meter
     call log_line(progress_report(meter, wall_time(), loop%step, loop%time, dt, elapsed / real(steps_taken, wp), &
-                                  loop%end_time - loop%time, &
+                                  loop%end_time - loop%time, steps_left=real(max_steps - loop%step, wp), &
                                   detail='  gap = '//scientific_text(system%pairs(the_pair)%contact%gap)//' m  v_n = '// &
                                   scientific_text(normal_approach_speed(system, the_pair))//' m/s'))
   end subroutine progress_line

@@ -42,6 +42,7 @@ module resolved_pair_scene
   use fluid_solver, only: fluid_solver_t
   use fluid_diagnostics, only: fluid_statistics_t, compute_fluid_statistics, advective_rate
   use time_step_control, only: next_time_step, explicit_viscous_limit
+  use time_step_guard, only: check_time_step
   use fluid_restart, only: write_fluid_checkpoint, write_fluid_snapshot
   use body_surface_output, only: system_body_poses
   use fluid_monitor, only: statistics_open, statistics_write, statistics_close, progress_line, timing_report
@@ -158,6 +159,7 @@ contains
     do while (.not. finished)
       dt = next_time_step(cfg%run%dt_mode, cfg%run%dt, cfg%run%cfl_target, rate, viscous_limit, solver%time, &
                           cfg%run%end_time)
+      call check_time_step(cfg%run, solver, rate)   ! a collapsed CFL step stops the run
       dt_particle = dt / substeps
       step_start = solver%time
       call hydrodynamics%fluid_step(solver, forcing, system, dt)

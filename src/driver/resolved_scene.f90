@@ -19,6 +19,7 @@ module resolved_scene
   use initial_fields, only: set_rest, set_taylor_green, set_random_field
   use fluid_diagnostics, only: fluid_statistics_t, compute_fluid_statistics, advective_rate
   use time_step_control, only: next_time_step, explicit_viscous_limit
+  use time_step_guard, only: check_time_step
   use fluid_restart, only: write_fluid_checkpoint, read_fluid_checkpoint, write_fluid_snapshot, read_initial_field
   use fluid_monitor, only: statistics_open, statistics_write, statistics_close, progress_line, timing_report
   use forcing_driver, only: forcing_driver_t, forcing_driver_start, forced_fluid_advance, &
@@ -91,6 +92,7 @@ contains
     do while (solver%time < cfg%run%end_time .and. solver%step < cfg%run%max_steps)
       dt = next_time_step(cfg%run%dt_mode, cfg%run%dt, cfg%run%cfl_target, rate, viscous_limit, solver%time, &
                           cfg%run%end_time)
+      call check_time_step(cfg%run, solver, rate)   ! a collapsed CFL step stops the run
       if (with_bodies) then
         call bodies_step(dt)
       else

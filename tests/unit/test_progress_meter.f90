@@ -3,6 +3,7 @@
 !> follows the recent rate after dt changes. Reference values: the line's layout (docs/outputs.md,
 !> run log) and a synthetic run with known wall seconds per step, for which the true time left is
 !> (simulated time left / dt) x (seconds per step).
+! checks: 21
 program test_progress_meter
   use agglo_kinds, only: wp, i8
   use progress_meter, only: progress_meter_t, progress_report, progress_eta, scientific_text, fixed_text
@@ -58,5 +59,20 @@ program test_progress_meter
   ! A new run in the same process (step not after the previous report) starts afresh.
   line = progress_report(meter, 100.0_wp, 10_i8, 1.0e-5_wp, 1.0e-6_wp, 2.0e-3_wp, 1.0e-6_wp)
   call check_close(progress_eta(meter, 1.0e-6_wp), 2.0e-3_wp, 1.0e-12_wp, 'new_run_restarts_meter')
+  ! An estimate of 1000 days or more is shown as such, not as a duration: 1e297 steps of dt = 1e-300 s
+  ! at 1 ms each, and 1000 days plus one second.
+  meter = progress_meter_t()
+  line = progress_report(meter, 1.0_wp, 10_i8, 1.0e-299_wp, 1.0e-300_wp, per_step, 1.0e-3_wp)
+  call check(index(line, 'ETA > 1000 days') > 0 .and. index(line, 'h') == 0, 'eta_beyond_1000_days_capped', line)
+  meter = progress_meter_t()
+  line = progress_report(meter, 1.0_wp, 10_i8, 0.0_wp, 1.0_wp, 1.0_wp, 86400001.0_wp)
+  call check(index(line, 'ETA > 1000 days') > 0, 'eta_just_beyond_1000_days_capped', line)
+  meter = progress_meter_t()
+  line = progress_report(meter, 1.0_wp, 10_i8, 0.0_wp, 1.0_wp, 1.0_wp, 86399000.0_wp)
+  call check(index(line, 'ETA 23999h43m20s') > 0, 'eta_below_1000_days_shown', line)
+  ! Before any measurement (no seconds per step from the caller) the ETA is not guessed.
+  meter = progress_meter_t()
+  line = progress_report(meter, 1.0_wp, 10_i8, 0.0_wp, 1.0_wp, -1.0_wp, 1.0_wp)
+  call check(index(line, 'ETA unknown') > 0, 'eta_unknown_before_measurement', line)
   call test_finish()
 end program test_progress_meter
