@@ -47,7 +47,10 @@ tally() { # name, log file, exit status, declared checks (empty: none declared; 
   if [ "$declared" != - ]; then
     runtime=$(sed -n 's/^CHECKS \([0-9][0-9]*\) *$/\1/p' "$log" | head -n 1)
     declared=${runtime:-$declared}
-    if [ -z "$declared" ]; then
+    if [ "$declared" = twice ]; then
+      echo "FAIL $name: declares its checks more than once (keep one line '# checks: N' or" \
+           "'! checks: N'; tests/run_tests.sh)"; f=$((f + 1))
+    elif [ -z "$declared" ]; then
       echo "FAIL $name: no declared checks (a line '# checks: N' in the script, '! checks: N' in the" \
            "program's source; tests/run_tests.sh)"; f=$((f + 1))
     elif [ "$ran" -ne "$declared" ]; then
@@ -58,10 +61,13 @@ tally() { # name, log file, exit status, declared checks (empty: none declared; 
   passed=$((passed + p)); failed=$((failed + f))
 }
 
-# The N of the first line "<comment> checks: N" of a file (empty without one or without the file).
+# The N of the line "<comment> checks: N" of a file (empty without one or without the file; "twice"
+# when the file has more than one such line: a merge or an edit left a stale one beside the new).
 declared_checks() { # file, comment character
   [ -f "$1" ] || return 0
-  sed -n "s/^$2 *checks: *\([0-9][0-9]*\) *\$/\1/p" "$1" | head -n 1
+  local counts
+  counts=$(sed -n "s/^$2 *checks: *\([0-9][0-9]*\) *\$/\1/p" "$1")
+  if [ "$(printf '%s' "$counts" | grep -c .)" -gt 1 ]; then echo twice; else printf '%s\n' "$counts"; fi
 }
 
 for exe in "$BUILD"/tests/test_*; do   # glob order is sorted

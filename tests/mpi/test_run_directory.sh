@@ -1,5 +1,4 @@
 #!/usr/bin/env bash
-# checks: 10
 # Run directories with $AGGLO (docs/outputs.md, "Run directory and manifest"), 2 ranks unless said:
 #  - no shell sees deck text: &output directory = 'out_$(touch x)' and a name with spaces, quotes,
 #    backquotes and non-ASCII letters are made literally, and no command runs;

@@ -1,5 +1,4 @@
 #!/usr/bin/env bash
-# checks: 4
 # Run-time stops of the resolved scene with $AGGLO (docs/studies/validation.md, "Restart hygiene and run
 # stops"): a NaN or a CFL above the limit stops the run with a message and a final field dump; 2 ranks:
 #  - CFL: a fixed dt with strong Eswaran-Pope forcing from rest; the flow accelerates until the

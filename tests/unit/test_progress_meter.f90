@@ -1,4 +1,3 @@
-! checks: 17
 !> Unit tests of the progress line: numbers keep their exponent and leading zero, and the ETA
 !> follows the recent rate after dt changes. Reference values: the line's layout (docs/outputs.md,
 !> run log) and a synthetic run with known wall seconds per step, for which the true time left is
