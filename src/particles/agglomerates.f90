@@ -2,11 +2,11 @@
 !> "Agglomerates").
 !>
 !> Input: the bodies (shapes, and states with positions in the box and orientations), the box
-!> periods and the bonds. A bond (i, j, n) says that body j at its image x_j + n L (n integer
-!> periods per direction, L the box lengths, elementwise) is bonded to body i at x_i. The positions
-!> may be wrapped into the box or continuous (unwrapped) as long as every bond's image belongs to
-!> the positions given: bond_image gives the minimum image of a bond formed now, and
-!> carried_bond_image keeps a bond's image true while its bodies cross the box boundaries.
+!> periods and the bonds. A bond (i, j, n) (bond_t, module bond_graph) says that body j at its image
+!> x_j + n L (n integer periods per direction, L the box lengths, elementwise) is bonded to body i
+!> at x_i. The positions may be wrapped into the box or continuous (unwrapped) as long as every
+!> bond's image belongs to the positions given: bond_image gives the minimum image of a bond formed
+!> now, and carried_bond_image keeps a bond's image true while its bodies cross the box boundaries.
 !>
 !> Output (agglomerates_t), per call:
 !>  - clusters: the connected components of the bond graph (union-find, module bond_graph), numbered
@@ -369,7 +369,7 @@ contains
   end subroutine check_duplicates
 
   !> The fractal dimension and prefactor of N = k_f (R_g / radius)^D_f (Sorensen 2001, Aerosol Sci.
-  !> Technol. 35, 648, Eq. 1) by least squares of ln N on ln(R_g / radius) over the clusters with
+  !> Technol. 35, 648) by least squares of ln N on ln(R_g / radius) over the clusters with
   !> at least min_size members (and include, if given: e.g. .not. percolating). radius: the
   !> volume-equivalent radius of one body. A cluster with R_g <= 0 (a single body's R_g over centres
   !> alone) has no logarithm and is left out. Fewer than two distinct R_g: NaN dimension; fewer
