@@ -332,16 +332,21 @@ contains
     real(wp), intent(in) :: box_length(3)
     integer :: b
     character(len=160) :: text
+    character(len=48) :: problem
     do b = 1, size(bonds)
       associate (i => bonds(b)%first, j => bonds(b)%second)
-        write(text, '(a,i0,a,i0,a,i0,a,3(1x,i0),a)') 'bond ', b, ' (', i, ', ', j, ', image', bonds(b)%image, ')'
+        problem = ''
         if (min(i, j) < 1 .or. max(i, j) > n) then
-          write(text, '(a,a,i0)') trim(text), ' names a body outside 1..', n
-          call fatal('agglomerates: '//trim(text), collective=.false.)
+          write(problem, '(a,i0)') 'names a body outside 1..', n
+        else if (i == j) then
+          problem = 'bonds a body to itself'
+        else if (any(bonds(b)%image /= 0 .and. .not. box_length > 0.0_wp)) then
+          problem = 'has an image in an unbounded direction'
         end if
-        if (i == j) call fatal('agglomerates: '//trim(text)//' bonds a body to itself', collective=.false.)
-        if (any(bonds(b)%image /= 0 .and. .not. box_length > 0.0_wp)) &
-          call fatal('agglomerates: '//trim(text)//' has an image in an unbounded direction', collective=.false.)
+        if (len_trim(problem) == 0) cycle
+        write(text, '(a,i0,a,i0,a,i0,a,3(1x,i0),a)') 'agglomerates: bond ', b, ' (', i, ', ', j, ', image', &
+          bonds(b)%image, ') '
+        call fatal(trim(text)//' '//trim(problem), collective=.false.)
       end associate
     end do
   end subroutine check_bonds
