@@ -5,7 +5,7 @@ module periodic_box
   use agglo_kinds, only: wp
   implicit none
   private
-  public :: minimum_image, image_shift
+  public :: minimum_image, image_shift, image_periods
 
 contains
 
@@ -23,5 +23,14 @@ contains
     real(wp) :: image
     image = separation + image_shift(separation, period)
   end function minimum_image
+
+  !> image_shift in whole periods: the lattice vector n with separation + n L the minimum image
+  !> (0 where unbounded). Integer, so that sums of image shifts around a cycle are exact.
+  elemental function image_periods(separation, period) result(periods)
+    real(wp), intent(in) :: separation, period
+    integer :: periods
+    periods = 0
+    if (period > 0.0_wp) periods = -nint(separation / period)
+  end function image_periods
 
 end module periodic_box
