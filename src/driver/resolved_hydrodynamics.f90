@@ -1,5 +1,5 @@
-!> &scene particle_coupling = 'resolved': the hydrodynamic-load provider of the resolved pair scene
-!> (module pair_hydrodynamics) for free particles resolved by the immersed boundary (docs/theory.md,
+!> &scene particle_coupling = 'resolved': the hydrodynamic-load provider of the scene loop
+!> (module particle_hydrodynamics) for free particles resolved by the immersed boundary (docs/theory.md,
 !> "Free particles"; docs/design.md, "The pair in the resolved fluid").
 !>
 !> Fluid step t^n -> t^{n+1}: the bodies are placed where the particle state predicts them at
@@ -71,12 +71,13 @@
 !> A^{n-j} (Crank-Nicolson's history estimate) and the loads; all go into the checkpoint
 !> (resolved_write_checkpoint), the geometry is recomputed from the particle state every step.
 module resolved_hydrodynamics
-  use agglo_kinds, only: wp
+  use agglo_kinds, only: wp, i8
   use error_handling, only: fatal
   use physical_constants, only: pi
   use logger, only: log_line
   use text_format, only: real_text, int_text
   use checkpoint_files, only: checkpoint_t
+  use run_directory, only: run_file
   use hdf5_io, only: h5_write_array, h5_read_array, h5_exists
   use fluid_solver, only: fluid_solver_t
   use forcing_driver, only: forcing_driver_t, forcing_driver_evaluate, forcing_driver_advance
@@ -87,18 +88,42 @@ module resolved_hydrodynamics
   use stokes_resistance, only: spheroid_added_mass_coefficients, stokes_resistance_t, stokes_resistance_of
   use immersed_geometry, only: immersed_body_t, thin_dimension_cells
   use immersed_boundary, only: ibm_settings_t, ibm_set_bodies, ibm_impose, imposition_report_t, ibm_fallback_rows
-  use immersed_scene, only: immersed_scene_t, prescribed_motion_t, immersed_scene_create, immersed_step
-  use pair_hydrodynamics, only: pair_hydrodynamics_t
+  use immersed_scene, only: immersed_scene_t, prescribed_motion_t, immersed_scene_create, immersed_step, loads_open, &
+                            loads_write, loads_close
+  use particle_hydrodynamics, only: particle_hydrodynamics_t
   use rigid_body, only: angular_velocity_lab, added_inertia_t
   use hypre_solver, only: linear_solver_config_t
   implicit none
   private
-  public :: resolved_hydrodynamics_t, resolved_hydrodynamics_create, rotational_added_inertia
+  public :: resolved_hydrodynamics_t, resolved_hydrodynamics_options_t, resolved_hydrodynamics_create, &
+            rotational_added_inertia
+
+  !> How the provider is built (resolved_hydrodynamics_create).
+  type :: resolved_hydrodynamics_options_t
+    !> The imposition (&scene ibm_coupling, &bodies ghost_tolerance, max_sweeps; the fluid density)
+    type(ibm_settings_t) :: settings
+    !> The loads handed on, as immersed_scene_create takes them (&bodies load_method): 'momentum' | 'surface'
+    character(len=16) :: load_method = 'momentum'
+    !> The face sum's icosphere level (&bodies mesh_level with load_method = 'surface' or
+    !> compare_loads); -1: no face sum
+    integer :: surface_level = -1
+    logical :: stabilise = .true.                  !< the added-mass stabilisation (&scene added_mass)
+    logical :: restart = .false.                   !< the fluid already holds the bodies (a restart)
+    real(wp) :: gravity(3) = 0                     !< m/s^2 (module header, "Gravity")
+    !> The hypre solve of the Crank-Nicolson predictor with the body rows (&fluid predictor_tolerance,
+    !> predictor_max_iterations; unused with explicit diffusion)
+    type(linear_solver_config_t) :: predictor_config = linear_solver_config_t(method='bicgstab', &
+        preconditioner='user', tolerance=1.0e-8_wp, max_iterations=200)
+    !> &bodies geometry = 'mesh': the icosphere level of the surface the ghost nodes see (20 4^level
+    !> faces, inside the spheroid); -1: the analytic spheroid
+    integer :: geometry_level = -1
+    logical :: explicit_history = .false.          !< &scene added_mass_history (explicit diffusion only)
+  end type resolved_hydrodynamics_options_t
 
   !> Fluid steps of velocity changes the history reaction's estimate remembers (Crank-Nicolson).
   integer, parameter :: history_steps = 32
 
-  type, extends(pair_hydrodynamics_t) :: resolved_hydrodynamics_t
+  type, extends(particle_hydrodynamics_t) :: resolved_hydrodynamics_t
     type(immersed_scene_t) :: scene
     logical :: stabilise = .true.                      !< the added-mass stabilisation (&scene added_mass)
     logical :: inject = .true.                         !< set the fluid inside the bodies to their motion (a start)
@@ -139,34 +164,22 @@ module resolved_hydrodynamics
     procedure :: loads => resolved_loads
     procedure :: write_checkpoint => resolved_write_checkpoint
     procedure :: read_checkpoint => resolved_read_checkpoint
-    procedure :: progress_text => resolved_progress_text
+    procedure :: log_progress => resolved_log_progress
+    procedure :: open_outputs => resolved_open_outputs
+    procedure :: record_fluid_step => resolved_record_fluid_step
+    procedure :: finish => resolved_finish
     procedure :: impulse_inertia => resolved_impulse_inertia
   end type resolved_hydrodynamics_t
 
 contains
 
-  !> The provider for the system's bodies in the solver's fluid (collective: classifies the grid).
-  !> settings: the imposition (&scene ibm_coupling, &bodies ghost_tolerance, max_sweeps);
-  !> load_method, surface_level: as immersed_scene_create (&bodies load_method, mesh_level);
-  !> stabilise: the added-mass stabilisation; restart: the fluid already holds the bodies;
-  !> gravity: m/s^2 (module header); predictor_config: the hypre solve of the Crank-Nicolson
-  !> predictor (&fluid predictor_tolerance, predictor_max_iterations; immersed_scene_create's default
-  !> when absent); geometry_level: &bodies geometry = 'mesh', the icosphere level of the surface
-  !> the ghost nodes see (20 4^level faces, inside the spheroid; absent or -1: the analytic spheroid).
-  subroutine resolved_hydrodynamics_create(provider, solver, system, settings, load_method, surface_level, &
-                                           stabilise, restart, gravity, predictor_config, geometry_level, &
-                                           explicit_history)
+  !> The provider for the system's bodies in the solver's fluid (collective: classifies the grid),
+  !> as the options say (resolved_hydrodynamics_options_t).
+  subroutine resolved_hydrodynamics_create(provider, solver, system, options)
     type(resolved_hydrodynamics_t), intent(out) :: provider
     type(fluid_solver_t), intent(inout) :: solver
     type(particle_system_t), intent(in) :: system
-    type(ibm_settings_t), intent(in) :: settings
-    character(len=*), intent(in) :: load_method
-    integer, intent(in) :: surface_level
-    logical, intent(in) :: stabilise, restart
-    real(wp), intent(in) :: gravity(3)
-    type(linear_solver_config_t), intent(in), optional :: predictor_config
-    integer, intent(in), optional :: geometry_level
-    logical, intent(in), optional :: explicit_history
+    type(resolved_hydrodynamics_options_t), intent(in) :: options
     type(prescribed_motion_t), allocatable :: motion(:)
     real(wp) :: k(2), fluid_mass, ratio_translation, ratio_rotation
     type(stokes_resistance_t) :: resistance
@@ -182,14 +195,10 @@ contains
     provider%rotational_history_length = provider%translational_resistance
     provider%viscosity = solver%viscosity
     provider%history_lag = 0
-    if (present(explicit_history)) then
-      if (explicit_history .and. .not. solver%crank_nicolson) provider%history_lag = 1
-    end if
+    if (options%explicit_history .and. .not. solver%crank_nicolson) provider%history_lag = 1
     ratio_translation = 0
     ratio_rotation = 0
-    if (present(geometry_level)) then
-      if (geometry_level >= 0) allocate(provider%meshes(system%n))
-    end if
+    if (options%geometry_level >= 0) allocate(provider%meshes(system%n))
     do i = 1, system%n
       call require_thick_enough(system%shapes(i), solver)
       ! At rest where the particle is: the scene's first placement; every step places the bodies anew.
@@ -197,11 +206,11 @@ contains
       motion(i)%centre = system%bodies(i)%position
       motion(i)%orientation = system%bodies(i)%quaternion
       if (allocated(provider%meshes)) then
-        call build_icosphere_mesh(system%shapes(i), geometry_level, provider%meshes(i))
+        call build_icosphere_mesh(system%shapes(i), options%geometry_level, provider%meshes(i))
         motion(i)%mesh = provider%meshes(i)
       end if
       fluid_mass = solver%density * system%shapes(i)%volume
-      provider%weight(:, i) = (system%bodies(i)%mass - fluid_mass) * gravity
+      provider%weight(:, i) = (system%bodies(i)%mass - fluid_mass) * options%gravity
       k = spheroid_added_mass_coefficients(system%shapes(i)%a, system%shapes(i)%b)
       provider%added_mass(:, i) = fluid_mass * [k(1), k(2), k(2)]
       provider%added_inertia(:, i) = [0.0_wp, 1.0_wp, 1.0_wp] * &
@@ -219,9 +228,9 @@ contains
       ratio_translation = max(ratio_translation, maxval(provider%added_mass(:, i)) / system%bodies(i)%mass)
       ratio_rotation = max(ratio_rotation, maxval(provider%added_inertia(:, i) / system%bodies(i)%inertia_body))
     end do
-    call immersed_scene_create(provider%scene, solver, motion, settings, &
+    call immersed_scene_create(provider%scene, solver, motion, options%settings, &
                                -sum(provider%weight, dim=2) / (provider%box(1) * provider%box(2) * provider%box(3)), &
-                               load_method, surface_level, predictor_config)
+                               options%load_method, options%surface_level, options%predictor_config)
     allocate(provider%force(3, system%n), provider%torque(3, system%n))
     provider%force = 0
     provider%torque = 0
@@ -239,27 +248,27 @@ contains
              provider%earlier_angular_acceleration(3, system%n, history_steps))
     provider%earlier_acceleration = 0
     provider%earlier_angular_acceleration = 0
-    provider%stabilise = stabilise
-    provider%inject = .not. restart
+    provider%stabilise = options%stabilise
+    provider%inject = .not. options%restart
     call log_line('resolved particles: largest added mass / mass '//real_text(ratio_translation)// &
         ', added inertia / inertia '//real_text(ratio_rotation)//' (potential flow); added-mass stabilisation '// &
-        merge('on ', 'off', stabilise))
-    if (.not. stabilise .and. max(ratio_translation, ratio_rotation) >= 1.0_wp) call log_line('resolved particles: '// &
+        merge('on ', 'off', options%stabilise))
+    if (.not. options%stabilise .and. max(ratio_translation, ratio_rotation) >= 1.0_wp) call log_line('resolved particles: '// &
         'warning: an added mass or inertia above the body''s own with the stabilisation off: the lagged loads '// &
         'amplify a disturbance by that ratio per fluid step (unstable; &scene added_mass = .true.)')
-    if (solver%crank_nicolson .and. stabilise) call log_line('resolved particles: Crank-Nicolson: the '// &
+    if (solver%crank_nicolson .and. options%stabilise) call log_line('resolved particles: Crank-Nicolson: the '// &
         'stabilisation''s estimate adds the Stokes drag C dt and the history reaction C L 2 sqrt(dt / (pi nu)) '// &
         'over the last '//int_text(history_steps)//' fluid steps (docs/theory.md)')
-    if (provider%history_lag > 0 .and. stabilise) call log_line('resolved particles: explicit diffusion: the '// &
+    if (provider%history_lag > 0 .and. options%stabilise) call log_line('resolved particles: explicit diffusion: the '// &
         'stabilisation''s estimate adds the history reaction C L 2 sqrt(dt / (pi nu)), the resolved one arriving one '// &
         'fluid step later (&scene added_mass_history; docs/theory.md)')
-    if (solver%crank_nicolson .and. .not. stabilise) call log_line('resolved particles: warning: Crank-Nicolson '// &
+    if (solver%crank_nicolson .and. .not. options%stabilise) call log_line('resolved particles: warning: Crank-Nicolson '// &
         'without the stabilisation: at long steps the lagged drag and history reaction can exceed the body''s mass '// &
         '(unstable; &scene added_mass = .true.)')
   end subroutine resolved_hydrodynamics_create
 
   !> A body thinner than 4 cells is refused with the grid it needs: the ghost layers of its opposite
-  !> faces would overlap (ibm-notes section 0; the same rule as for the &bodies group).
+  !> faces would overlap (docs/theory.md, "Thin bodies"; the same rule as for the &bodies group).
   subroutine require_thick_enough(shape, solver)
     type(spheroid_t), intent(in) :: shape
     type(fluid_solver_t), intent(in) :: solver
@@ -521,9 +530,10 @@ contains
   end function basset_weight
 
   !> The last step's ghost-row sweeps (near contact the two bodies' rows couple and need more) and
-  !> the bodies' force magnitudes.
-  function resolved_progress_text(self) result(text)
+  !> the bodies' force magnitudes, in the progress log.
+  subroutine resolved_log_progress(self, solver)
     class(resolved_hydrodynamics_t), intent(in) :: self
+    type(fluid_solver_t), intent(in) :: solver
     character(len=:), allocatable :: text
     integer :: i
     text = '  immersed boundary: sweeps '//int_text(self%scene%predicted%sweeps)//', residual '// &
@@ -533,11 +543,35 @@ contains
     end do
     text = text//' N, fallback rows '//int_text(self%fallbacks)//' (saturated '//int_text(self%saturated)// &
            '; most '//int_text(self%most_fallbacks)//', '//int_text(self%most_saturated)//')'
-  end function resolved_progress_text
+    call log_line(text)
+  end subroutine resolved_log_progress
+
+  !> bodies_loads.dat in the run directory: the immersed boundary's own force and torque on each
+  !> body after every fluid step (before the added-mass stabilisation; docs/outputs.md).
+  subroutine resolved_open_outputs(self, append, last_step)
+    class(resolved_hydrodynamics_t), intent(inout) :: self
+    logical, intent(in) :: append
+    integer(i8), intent(in) :: last_step
+    call loads_open(self%scene, run_file('bodies_loads.dat'), append=append, last_step=last_step)
+  end subroutine resolved_open_outputs
+
+  !> The immersed boundary's own loads of the step just taken in bodies_loads.dat (if opened).
+  subroutine resolved_record_fluid_step(self, solver)
+    class(resolved_hydrodynamics_t), intent(inout) :: self
+    type(fluid_solver_t), intent(in) :: solver
+    call loads_write(self%scene, solver%step, solver%time)
+  end subroutine resolved_record_fluid_step
+
+  subroutine resolved_finish(self, solver, steps)
+    class(resolved_hydrodynamics_t), intent(inout) :: self
+    type(fluid_solver_t), intent(in) :: solver
+    integer(i8), intent(in) :: steps
+    call loads_close(self%scene)
+  end subroutine resolved_finish
 
   !> The provider's state across fluid steps (group resolved_hydrodynamics of the transaction).
   subroutine resolved_write_checkpoint(self, transaction)
-    class(resolved_hydrodynamics_t), intent(in) :: self
+    class(resolved_hydrodynamics_t), intent(inout) :: self
     type(checkpoint_t), intent(in) :: transaction
     associate (file => transaction%file)
       call h5_write_array(file, 'resolved_hydrodynamics/force', self%force)
