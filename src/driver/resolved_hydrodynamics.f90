@@ -5,8 +5,8 @@
 !> Fluid step t^n -> t^{n+1}: the bodies are placed where the particle state predicts them at
 !> t^{n+1} (centre x^n + U^n dt, orientation turned by Omega^n dt) and move with the state's U^n,
 !> Omega^n, the latest known velocities; the immersed scene's staged step (immersed_step) imposes
-!> them and returns the momentum-balance force and torque F^n, T^n. The placement error, O(a dt^2),
-!> is some 1e-8 of a cell at the fluid's step; the one-step lag of the velocities is what the
+!> them and returns the momentum-balance force and torque F^n, T^n. The placement error is
+!> O(a dt^2) (docs/theory.md, "Free particles"); the one-step lag of the velocities is what the
 !> added-mass stabilisation below is about. The loads stay frozen over the fluid step's
 !> particle_substeps sub-steps (closest points, DLVO and collisions every sub-step).
 !>
@@ -26,8 +26,8 @@
 !> (resolved_impulse_inertia; module rigid_body, "Impulses in a fluid"). With the body's mass alone,
 !> the impulse that holds a body against its attraction F_other would be m / (m + M_a) of the
 !> attraction's; two bodies whose M_a along the normal differ cannot both be held by one equal and
-!> opposite impulse, and the held pair drifts under the difference (a face-on calcite disk against
-!> an edge-on one: 0.475 F_other; docs/theory.md, "Contact impulses with the added mass").
+!> opposite impulse, and the held pair drifts under the difference (docs/theory.md, "Contact
+!> impulses with the added mass").
 !>
 !> Long fluid steps (&fluid viscous_scheme = 'crank_nicolson'; docs/theory.md, "Crank-Nicolson with
 !> free particles"): the ghost and interior rows of the predictor's system (immersed_predictor) hold
@@ -47,15 +47,14 @@
 !> With explicit diffusion C and L are zero and the step is the added-mass one above unchanged.
 !> Sub-steps: the particle sub-steps of a long fluid step integrate the frozen load as before; the
 !> placement x^n + U^n dt differs from the particles' x^{n+1} by a dt^2 / 2, and after a collision
-!> within the step by up to the velocity jump times dt / 2 (about 1e-2 of a cell for the validation's
-!> pair at 5 times the explicit bound); the next step places the bodies where the particles are.
+!> within the step by up to the velocity jump times dt / 2; the next step places the bodies where
+!> the particles are.
 !>
 !> History with explicit diffusion (&scene added_mass_history; docs/theory.md, "History with explicit
 !> diffusion"): the explicit predictor diffuses u^n, which does not yet hold the velocity the step
 !> imposes, so the resolved viscous reaction to a velocity change starts one fluid step after it
-!> (a sphere held at U_0 after the release receives 0.196, 0.097, 0.058, 0.043 m U_0 in its first
-!> steps at D/dx = 8, nu dt/dx^2 = 0.06, ratio 2.72, against the unsteady Stokes 0.304, 0.054,
-!> 0.043, 0.037: the added mass within the step, the sqrt(t) history one step late). Then the
+!> (the added mass within the step, the sqrt(t) history one step late; measured in docs/theory.md,
+!> "History with explicit diffusion"). Then the
 !> estimate is M = M_a + M_B (the drag stays with the resolved load, history_lag = 1) and the
 !> put-back weighs the resolved history of a change j steps back with w_{j-1} instead of w_j
 !> (function put_back). The start's jump from the fluid at rest, which the injection leaves to the
@@ -93,6 +92,7 @@ module resolved_hydrodynamics
   use particle_hydrodynamics, only: particle_hydrodynamics_t
   use rigid_body, only: angular_velocity_lab, added_inertia_t
   use hypre_solver, only: linear_solver_config_t
+  use added_mass_estimate, only: lagged_reaction, put_back
   implicit none
   private
   public :: resolved_hydrodynamics_t, resolved_hydrodynamics_options_t, resolved_hydrodynamics_create, &
@@ -458,76 +458,6 @@ contains
                            added(i)%inertia, history)
     end do
   end function resolved_impulse_inertia
-
-  !> The lagged reaction's estimate per body axis (kg, or kg m^2 for rotation; module header):
-  !> the impulse / velocity change of a body whose velocity steps at the start of a fluid step,
-  !> integrated over the step, M + C dt + C L 2 sqrt(dt / (pi nu)): potential flow, quasi-steady
-  !> drag and the history (Basset) reaction C L / sqrt(pi nu t), the last also returned as history.
-  !> With the viscous reaction trailing by lag > 0 steps (explicit diffusion) the drag stays with the
-  !> resolved load: taken implicitly it would move momentum the fluid delivers lag steps later.
-  pure subroutine lagged_reaction(added, resistance, length, dt, viscosity, lag, reaction, history)
-    real(wp), intent(in) :: added(3), resistance(3), length(3), dt, viscosity
-    integer, intent(in) :: lag
-    real(wp), intent(out) :: reaction(3), history(3)
-    history = 0
-    if (dt > 0.0_wp .and. viscosity > 0.0_wp) history = resistance * 2.0_wp * length * sqrt(dt / (pi * viscosity))
-    reaction = added + history
-    if (lag == 0) reaction = reaction + resistance * dt
-  end subroutine lagged_reaction
-
-  !> The estimate put back into the lagged load (body frame): the reaction the last step's velocity
-  !> change A^n caused, less what the history reaction of each change still holds in the next step
-  !> (the Basset weights w_j = sqrt(j + 1) - sqrt(j) of a velocity step j steps back), over the
-  !> N = history_steps steps remembered. The resolved history reaction to a change j steps back is
-  !> h_j = w_{j - lag} (zero for j < lag: explicit diffusion first sees a change in the step after it),
-  !> the estimate's g_j = w_j, taken implicitly at j = 0; what the next step needs explicitly is g_{j+1}:
-  !>   (lagged - history) A^n + history [sum_{j=0}^{N} (h_j - g_{j+1}) A^{n-j} + (h_s - g_s) A_start],
-  !> lag 0 (Crank-Nicolson): lagged A^n - history [w_1 A^n - sum_{j=1}^{N-1} (w_j - w_{j+1}) A^{n-j} - w_N A^{n-N}].
-  !> The start (lag > 0 only; its records are zero otherwise), s = since_start - 1 steps back: the
-  !> jump from the fluid at rest A_start, whose implicit part was never taken (the resolved load
-  !> holds its added mass), with the weights h_s - g_s (-1 at the first step, summing to zero), and
-  !> the change of the second step, A_first, with those of a change s - 1 steps back, kept for the
-  !> whole run: the start's changes are the largest, and leaving the memory with their remaining
-  !> weight at once they would jump the velocity (1.3% of U_0 at the density ratio 1).
-  pure function put_back(lagged, history, current, earlier, rotation, lag, start, first, since_start) result(estimate)
-    real(wp), intent(in) :: lagged(3), history(3), current(3), earlier(:, :), rotation(3, 3), start(3), first(3)
-    integer, intent(in) :: lag, since_start
-    real(wp) :: estimate(3), past(3)
-    integer :: j, last
-    last = size(earlier, 2)
-    past = history_weight(0, lag, last) * current
-    do j = 1, last
-      past = past + history_weight(j, lag, last) * earlier(:, j)
-    end do
-    if (since_start >= 1) past = past + (resolved_weight(since_start - 1, lag) - basset_weight(since_start - 1)) * start
-    if (since_start >= 2) past = past + (resolved_weight(since_start - 2, lag) - basset_weight(since_start - 1)) * first
-    estimate = (lagged - history) * matmul(current, rotation) + history * matmul(past, rotation)
-    if (since_start == 2) estimate = estimate + (lagged - history) * matmul(first, rotation)
-  end function put_back
-
-  !> h_j - g_{j+1} of put_back; the change that leaves the memory (j = last) takes its remaining
-  !> weight along, sqrt(last + 1) - sqrt(last - lag), so that the weights put back sum to lagged, the
-  !> velocity changes telescope and the box's momentum budget closes.
-  pure real(wp) function history_weight(j, lag, last) result(weight)
-    integer, intent(in) :: j, lag, last
-    if (j == last) then
-      weight = sqrt(real(last + 1, wp)) - sqrt(real(last - lag, wp))
-    else
-      weight = resolved_weight(j, lag) - basset_weight(j + 1)
-    end if
-  end function history_weight
-
-  !> h_j: the resolved history reaction j steps after a change, trailing by lag steps.
-  pure real(wp) function resolved_weight(j, lag) result(weight)
-    integer, intent(in) :: j, lag
-    weight = 0
-    if (j >= lag) weight = basset_weight(j - lag)
-  end function resolved_weight
-
-  pure real(wp) function basset_weight(j)
-    integer, intent(in) :: j
-    basset_weight = sqrt(real(j + 1, wp)) - sqrt(real(j, wp))
-  end function basset_weight
 
   !> The last step's ghost-row sweeps (near contact the two bodies' rows couple and need more) and
   !> the bodies' force magnitudes, in the progress log.

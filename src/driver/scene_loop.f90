@@ -32,9 +32,9 @@ module scene_loop
   use text_format, only: real_text, int_text
   use logger, only: log_line
   use wall_clock, only: wall_time
-  use progress_meter, only: progress_meter_t, progress_report, scientific_text
+  use progress_meter, only: progress_report, scientific_text
   use run_directory, only: run_file
-  use timer_registry, only: timer_register, timer_tic, timer_toc
+  use timer_registry, only: timer_tic, timer_toc
   use checkpoint_files, only: checkpoint_t, checkpoint_begin, checkpoint_commit, checkpoint_open_newest, checkpoint_close
   use fluid_solver, only: fluid_solver_t
   use fluid_diagnostics, only: fluid_statistics_t, compute_fluid_statistics, advective_rate
@@ -42,6 +42,7 @@ module scene_loop
   use fluid_restart, only: write_fluid_checkpoint, write_fluid_snapshot
   use body_surface_output, only: body_pose_t
   use fluid_monitor, only: statistics_open, statistics_write, statistics_close, progress_line, timing_report
+  use run_context, only: run_context_t, run_context_start
   use forcing_driver, only: forcing_driver_t, forcing_driver_start, forcing_driver_power_input, &
                             forcing_driver_write_checkpoint, forcing_driver_finish
   use flow_statistics_output, only: flow_output_t, flow_output_start, flow_output_due, flow_output_record, &
@@ -85,10 +86,9 @@ contains
     type(particle_output_t) :: output
     type(run_summary_t) :: summary
     type(pair_loop_t) :: loop                            ! the particles' clock and the pair's records
-    type(progress_meter_t) :: meter                      ! the fluid-free scenes' progress (fluid: fluid_monitor's)
-    real(wp) :: dt, step_start, rate, viscous_limit, next_field_time, wall_start, step_wall
-    integer(i8) :: first_step
-    integer :: substeps, timer_fluid, timer_checks, timer_fluid_output, timer_particles, timer_io, timer_checkpoint
+    type(run_context_t) :: context                       ! the run's monitor, meters, stage timers, wall clocks
+    real(wp) :: dt, step_start, rate, viscous_limit, next_field_time
+    integer :: substeps
     logical :: finite, finished
 
     with_fluid = cfg%scene%fluid == 'resolved'
@@ -101,9 +101,9 @@ contains
     if (with_fluid .and. with_particles) substeps = cfg%scene%particle_substeps
 
     call set_up()
-    first_step = loop_step()
-    wall_start = wall_time()
-    step_wall = wall_start
+    context%first_step = loop_step()
+    context%wall_start = wall_time()
+    context%step_wall = context%wall_start
     if (with_fluid) call advective_rate(solver, rate, finite)
 
     do while (.not. finished)
@@ -133,20 +133,14 @@ contains
     !> The fluid, the particles, the provider; the restart or the start's outputs.
     subroutine set_up()
       real(wp) :: box(3)
-      timer_fluid = 0; timer_checks = 0; timer_fluid_output = 0; timer_particles = 0; timer_io = 0
       if (with_fluid) then
         call start_fluid(cfg, solver, restart)
-        timer_fluid = timer_register('fluid step')
-        timer_checks = timer_register('stop checks')
-        timer_fluid_output = timer_register('fluid outputs')
-        timer_io = timer_register('I/O')
+        call run_context_start(context, with_fluid, with_particles)
         call forcing_driver_start(forcing, cfg, solver, restart)
-      else if (cfg%run%restart) then
-        call checkpoint_open_newest(restart)
+      else
+        call run_context_start(context, with_fluid, with_particles)
+        if (cfg%run%restart) call checkpoint_open_newest(restart)
       end if
-      if (with_particles) timer_particles = timer_register(trim(merge('particle sub-steps', 'particle step     ', &
-                                                                      with_fluid)))
-      timer_checkpoint = timer_register('checkpoint')
       if (with_particles .and. .not. with_pair) then
         call place_free_bodies(cfg, solver, system)
       else if (with_pair) then
@@ -192,7 +186,7 @@ contains
 
       if (with_fluid .and. .not. cfg%run%restart) then
         call compute_fluid_statistics(solver, 0.0_wp, stats)
-        call statistics_write(solver%step, solver%time, 0.0_wp, stats)
+        call statistics_write(context%monitor, solver%step, solver%time, 0.0_wp, stats)
         call output_fields()
       end if
       if (with_particles) then
@@ -219,7 +213,8 @@ contains
       viscous_limit = huge(1.0_wp)
       if (.not. solver%crank_nicolson) viscous_limit = explicit_viscous_limit(solver%grid%dx, solver%grid%dy, &
                                                                               solver%grid%dz, solver%viscosity)
-      call statistics_open(run_file('fluid_statistics.dat'), append=cfg%run%restart, last_step=solver%step)
+      call statistics_open(context%monitor, run_file('fluid_statistics.dat'), append=cfg%run%restart, &
+                           last_step=solver%step)
       call hydrodynamics%open_outputs(cfg%run%restart, solver%step)
       next_field_time = next_output_time(solver%time, cfg%output%field_interval, cfg%run%end_time)
     end subroutine start_fluid_outputs
@@ -237,34 +232,34 @@ contains
 
     !> Forcing -> predict -> couple -> project -> loads: the provider's fluid step.
     subroutine fluid_step()
-      call timer_tic(timer_fluid)
+      call timer_tic(context%timers%fluid_step)
       call hydrodynamics%fluid_step(solver, forcing, system, dt)
       ! The contact impulses of this step's sub-steps carry the added masses its loads move with.
       if (with_particles) call particle_system_set_added_inertia(system, hydrodynamics%impulse_inertia(system))
       call hydrodynamics%record_fluid_step(solver)
-      call timer_toc(timer_fluid)
+      call timer_toc(context%timers%fluid_step)
     end subroutine fluid_step
 
     !> rate: the advective rate sum(|u_i|/dx_i) of the new field, for the next step's dt and the
     !> CFL check of the step just taken (one pass over the field per step).
     subroutine stop_checks()
-      call timer_tic(timer_checks)
+      call timer_tic(context%timers%stop_checks)
       call advective_rate(solver, rate, finite)
       if (.not. finite) call stop_run('the velocity field is no longer finite (NaN or infinity) at step ')
       if (dt * rate > cfg%run%cfl_limit) call stop_run('CFL number '//real_text(dt * rate)// &
           ' exceeds &run cfl_limit = '//real_text(cfg%run%cfl_limit)//' at step ')
-      call timer_toc(timer_checks)
+      call timer_toc(context%timers%stop_checks)
     end subroutine stop_checks
 
     subroutine fluid_outputs()
-      call timer_tic(timer_fluid_output)
+      call timer_tic(context%timers%fluid_outputs)
       if (mod(solver%step, int(cfg%output%stats_interval, i8)) == 0) then
         call compute_fluid_statistics(solver, dt, stats)
-        call statistics_write(solver%step, solver%time, dt, stats)
+        call statistics_write(context%monitor, solver%step, solver%time, dt, stats)
       end if
       if (flow_output_due(flow, solver%step)) call flow_output_record(flow, solver, &
                                                                      forcing_driver_power_input(forcing, solver))
-      call timer_toc(timer_fluid_output)
+      call timer_toc(context%timers%fluid_outputs)
     end subroutine fluid_outputs
 
     !> The particle sub-steps of this loop step (interact and step: particle_system_step), each
@@ -272,7 +267,7 @@ contains
     subroutine particle_substeps()
       real(wp) :: dt_particle
       integer :: substep
-      call timer_tic(timer_particles)
+      call timer_tic(context%timers%particles)
       dt_particle = dt / substeps
       call felt_loads(0.0_wp)
       do substep = 1, substeps
@@ -286,7 +281,7 @@ contains
         call felt_loads(real(substep, wp) / substeps)
         if (sampled(cfg, loop%step)) call write_sample(output, loop%time, system, hydrodynamic)
       end do
-      call timer_toc(timer_particles)
+      call timer_toc(context%timers%particles)
       finished = end_rule()
       if (finished .and. .not. sampled(cfg, loop%step)) call write_sample(output, loop%time, system, hydrodynamic)
     end subroutine particle_substeps
@@ -347,16 +342,18 @@ contains
     !> pair's gap and approach speed and the provider's figures.
     subroutine progress()
       if (.not. with_fluid) then
-        if (loop%step > first_step .and. (mod(loop%step, int(cfg%run%progress_interval, i8)) == 0 .or. finished)) &
-          call log_line(progress_report(meter, wall_time(), loop%step, loop%time, dt, &
-                                        (wall_time() - wall_start) / real(loop%step - first_step, wp), &
+        if (loop%step > context%first_step .and. &
+            (mod(loop%step, int(cfg%run%progress_interval, i8)) == 0 .or. finished)) &
+          call log_line(progress_report(context%meter, wall_time(), loop%step, loop%time, dt, &
+                                        (wall_time() - context%wall_start) / real(loop%step - context%first_step, wp), &
                                         loop%end_time - loop%time, detail=pair_progress_detail(system)))
         return
       end if
       if (mod(solver%step, int(cfg%run%progress_interval, i8)) == 0 .or. (finished .and. with_particles)) then
-        call progress_line(solver%step, solver%time, dt, (wall_time() - step_wall) / cfg%run%progress_interval, &
+        call progress_line(context%monitor, solver%step, solver%time, dt, &
+            (wall_time() - context%step_wall) / cfg%run%progress_interval, &
             min(real(cfg%run%max_steps - solver%step, wp), (loop%end_time - solver%time) / dt))
-        step_wall = wall_time()
+        context%step_wall = wall_time()
         if (with_pair) call log_line('  pair: gap = '//scientific_text(system%pairs(the_pair)%contact%gap)// &
             ' m  v_n = '//scientific_text(normal_approach_speed(system, the_pair))//' m/s  collisions = '// &
             int_text(summary%collisions))
@@ -377,28 +374,28 @@ contains
     !> Every &output checkpoint_interval loop steps (none at a pair's last step: the end writes it).
     subroutine checkpoint_due()
       if (cfg%output%checkpoint_interval <= 0) return
-      if (loop_step() <= first_step) return
+      if (loop_step() <= context%first_step) return
       if (mod(loop_step(), int(cfg%output%checkpoint_interval, i8)) == 0) call checkpoint(last=.false.)
     end subroutine checkpoint_due
 
     !> The fluid's snapshot, with the bodies' surfaces when there are bodies.
     subroutine output_fields()
       type(body_pose_t), allocatable :: poses(:)
-      call timer_tic(timer_io)
+      call timer_tic(context%timers%fields)
       call hydrodynamics%body_poses(solver, system, poses)
       if (allocated(poses)) then
         call write_fluid_snapshot(solver, poses)
       else
         call write_fluid_snapshot(solver)
       end if
-      call timer_toc(timer_io)
+      call timer_toc(context%timers%fields)
     end subroutine output_fields
 
     !> One checkpoint transaction: each component that runs writes its group, then one commit.
     subroutine checkpoint(last)
       logical, intent(in) :: last          !< the finished run's last state
       type(checkpoint_t) :: transaction
-      call timer_tic(timer_checkpoint)
+      call timer_tic(context%timers%checkpoint)
       call checkpoint_begin(transaction, loop_step())
       if (with_fluid) then
         call write_fluid_checkpoint(transaction, solver)
@@ -407,13 +404,13 @@ contains
       if (with_particles) call write_pair_scene_group(transaction, cfg, system, loop, summary, hydrodynamic, output, last)
       call hydrodynamics%write_checkpoint(transaction)
       call checkpoint_commit(transaction, cfg%output%checkpoints_kept)
-      call timer_toc(timer_checkpoint)
+      call timer_toc(context%timers%checkpoint)
     end subroutine checkpoint
 
     !> The last snapshot and checkpoint, the outputs closed, the summary and the timing breakdown.
     subroutine finish()
       integer(i8) :: steps
-      steps = loop_step() - first_step
+      steps = loop_step() - context%first_step
       if (with_fluid) call output_fields()
       if (with_particles) then
         ! The last state is always kept (checkpoint_interval = 0: only there), so a finished run
@@ -425,23 +422,23 @@ contains
         call checkpoint(last=.true.)   ! the fluid alone: unless its last step was a checkpoint's
       end if
       if (with_fluid) then
-        call statistics_close()
+        call statistics_close(context%monitor)
         call hydrodynamics%finish(solver, steps)
         call forcing_driver_finish(forcing, solver)
         call flow_output_finish(flow)
       end if
       if (with_pair) then
         call finish_summary(cfg, rules, system, loop, summary)
-        summary%wall_time = wall_time() - wall_start
+        summary%wall_time = wall_time() - context%wall_start
         call write_summary_json(run_file('summary.json'), summary)
       end if
-      call timing_report(steps, wall_time() - wall_start)
+      call timing_report(steps, wall_time() - context%wall_start)
       if (.not. with_fluid) then
         call log_line('pair scene: outcome '//trim(summary%outcome)//'; particles.h5 and summary.json written')
       else if (with_particles .and. .not. with_pair) then
         call log_line('free bodies scene: '//int_text(system%n)//' bodies, '//int_text(summary%collisions)// &
-            ' collisions, t = '//real_text(solver%time)//' s; particles.h5, bodies_loads.dat, fluid_statistics.dat '// &
-            'and fields.xdmf in '//run_file(''))
+            ' collisions, t = '//real_text(solver%time)//' s; particles.h5, fluid_statistics.dat and fields.xdmf '// &
+            '(and bodies_loads.dat with particle_coupling = ''resolved'') in '//run_file(''))
       else if (with_particles) then
         call log_line('resolved pair scene: outcome '//trim(summary%outcome)//' at t = '//real_text(solver%time)// &
             ' s; particles.h5, summary.json, fluid_statistics.dat and fields.xdmf in '//run_file(''))
