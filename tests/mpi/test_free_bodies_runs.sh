@@ -17,9 +17,12 @@
 #    bit for bit (h5diff without tolerance);
 #  - the same bodies from a body file (&bodies file, CSV with a comment, a blank line, a quoted
 #    shape and a line with the angular velocity) give the same particles.h5 bit for bit; a line of
-#    11 fields is refused naming &bodies file and the line.
+#    11 fields is refused naming &bodies file and the line;
+#  - a body file holds more bodies than a deck's arrays (16): 20 spheres on a lattice, 2 fluid steps,
+#    give 20 bodies in particles.h5 and 20 rows per step in bodies_loads.dat;
+#  - free bodies without the resolved fluid are refused naming &scene particles.
 # Prints PASS/FAIL lines; works in a temporary directory.
-# checks: 7
+# checks: 9
 set -u
 AGGLO=${AGGLO:?AGGLO must be the agglo executable}
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
@@ -150,4 +153,42 @@ if [ "$status" -eq 2 ] && [[ $message == *'&bodies file = "bad.csv" line 2: 11 f
   echo "PASS free_bodies/body_file_bad_line_refused  (exit 2: ${message:0:120})"
 else
   echo "FAIL free_bodies/body_file_bad_line_refused: exit $status, message '$message'"
+fi
+
+python3 - <<'PY'
+third = 1.0e-3 / 3
+sites = [((i + 0.5) * third, (j + 0.5) * third, (k + 0.5) * third) for i in range(3) for j in range(3) for k in range(3)]
+with open('twenty.csv', 'w') as out:
+    out.write('# 20 spheres at rest on a lattice\n')
+    for x, y, z in sites[:20]:
+        out.write(f'sphere, 70.0e-6, 1.0, {x:.6e}, {y:.6e}, {z:.6e}, 0, 0, 0, 0.0, 0.0, 0.0\n')
+PY
+cat > twenty.nml <<'NML'
+&run name = 'twenty', max_steps = 2, end_time = 1.0, dt = 1.0e-5, dt_mode = 'fixed', progress_interval = 1 /
+&scene fluid = 'resolved', particles = 'free', particle_coupling = 'resolved', particle_substeps = 2,
+       added_mass = .true., dlvo = .false. /
+&grid nx = 32, ny = 32, nz = 32, length_x = 1.0e-3, length_y = 1.0e-3, length_z = 1.0e-3 /
+&fluid density = 997.0, viscosity = 1.0e-6, init = 'rest' /
+&pair density = 2710.0 /
+&bodies file = 'twenty.csv' /
+&output directory = 'twenty', stats_interval = 2, field_interval = 0.0 /
+NML
+if mpirun -np 1 "$AGGLO" twenty.nml > twenty.out 2>&1; then
+  bodies=$(dataset twenty/particles.h5 /bodies)
+  rows=$(grep -vc '^#' twenty/bodies_loads.dat)
+  if [ "$bodies" = 20 ] && [ "$rows" = 40 ]; then
+    echo "PASS free_bodies/body_file_holds_more_than_16_bodies  (20 bodies in particles.h5, $rows rows in bodies_loads.dat for 2 steps)"
+  else
+    echo "FAIL free_bodies/body_file_holds_more_than_16_bodies: $bodies bodies, $rows rows (expected 20, 40)"
+  fi
+else
+  echo "FAIL free_bodies/body_file_holds_more_than_16_bodies: the run failed: $(tail -n 3 twenty.out | head -c 300)"
+fi
+sed "s/fluid = 'resolved', particles = 'free', particle_coupling = 'resolved', particle_substeps = 2,/fluid = 'stokes', particles = 'free',/; /^&grid/d; s/added_mass = .true., //; s/dt_mode = 'fixed', //" twenty.nml > stokes.nml
+mpirun -np 1 "$AGGLO" stokes.nml > stokes.out 2>&1; status=$?
+message=$(grep -m1 'agglo: error' stokes.out)
+if [ "$status" -eq 2 ] && [[ $message == *"&scene particles = 'free' with fluid = 'stokes' is not allowed"* ]]; then
+  echo "PASS free_bodies/free_bodies_need_the_resolved_fluid  (exit 2: ${message:0:110})"
+else
+  echo "FAIL free_bodies/free_bodies_need_the_resolved_fluid: exit $status, message '$message'"
 fi
