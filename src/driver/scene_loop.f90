@@ -58,7 +58,8 @@ module scene_loop
                            normal_approach_speed, open_particle_output, pair_progress_detail, fluid_name, &
                            bodies_progress_detail
   use particle_hydrodynamics, only: particle_hydrodynamics_t
-  use scene_setup, only: start_fluid, next_output_time, hydrodynamics_of, add_fluid_motion, place_free_bodies
+  use scene_setup, only: start_fluid, next_output_time, hydrodynamics_of, add_fluid_motion, place_free_bodies, &
+                         require_bodies_apart
   implicit none
   private
   public :: run_scene
@@ -178,6 +179,7 @@ contains
         ! The collision test comes first, on the current state: with a detection distance of
         ! v_n dt the pair is caught before a step could carry it into overlap.
         call particle_system_interact(system, cfg%run%dt / substeps)
+        if (.not. with_pair) call require_bodies_apart(system)
       end if
       if (with_fluid) call start_fluid_outputs()
       if (with_particles .and. with_fluid) call log_line(scene_name//': particle coupling '''// &

@@ -4,7 +4,7 @@
 module scene_setup
   use agglo_kinds, only: wp, i8
   use agglo_config, only: agglo_config_t
-  use error_handling, only: fatal
+  use error_handling, only: fatal, input_error
   use logger, only: log_line
   use progress_meter, only: scientific_text
   use physical_constants, only: two_pi
@@ -29,7 +29,8 @@ module scene_setup
   use prescribed_hydrodynamics, only: prescribed_hydrodynamics_t, prescribed_hydrodynamics_create
   implicit none
   private
-  public :: start_fluid, next_output_time, hydrodynamics_of, add_fluid_motion, provider_name, place_free_bodies
+  public :: start_fluid, next_output_time, hydrodynamics_of, add_fluid_motion, provider_name, place_free_bodies, &
+            require_bodies_apart
 
 contains
 
@@ -187,4 +188,18 @@ contains
     call log_line('free bodies: '//int_text(system%n)//' bodies of density '//scientific_text(cfg%pair%density)// &
                   ' kg/m^3 placed by &bodies, moving under their loads')
   end subroutine place_free_bodies
+  !> Free bodies placed by &bodies must start apart: after the first interaction (closest points of
+  !> every pair) a pair at a gap <= 0 stops the run naming both bodies (collective: every rank
+  !> computes the same gaps).
+  subroutine require_bodies_apart(system)
+    type(particle_system_t), intent(in) :: system
+    integer :: p
+    do p = 1, size(system%pairs)
+      associate (pair => system%pairs(p))
+        if (.not. (pair%contact%gap > 0.0_wp)) call input_error('bodies', 'centre(:, '//int_text(pair%second)//')', &
+            'a body overlapping body '//int_text(pair%first)//' (gap '//scientific_text(pair%contact%gap)//' m)', &
+            'bodies apart at the start (gap > 0)')
+      end associate
+    end do
+  end subroutine require_bodies_apart
 end module scene_setup

@@ -20,9 +20,10 @@
 #    11 fields is refused naming &bodies file and the line;
 #  - a body file holds more bodies than a deck's arrays (16): 20 spheres on a lattice, 2 fluid steps,
 #    give 20 bodies in particles.h5 and 20 rows per step in bodies_loads.dat;
-#  - free bodies without the resolved fluid are refused naming &scene particles.
+#  - free bodies without the resolved fluid are refused naming &scene particles; bodies that
+#    overlap at the start stop the run on 2 ranks, naming &bodies centre and both bodies.
 # Prints PASS/FAIL lines; works in a temporary directory.
-# checks: 9
+# checks: 10
 set -u
 AGGLO=${AGGLO:?AGGLO must be the agglo executable}
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
@@ -191,4 +192,14 @@ if [ "$status" -eq 2 ] && [[ $message == *"&scene particles = 'free' with fluid 
   echo "PASS free_bodies/free_bodies_need_the_resolved_fluid  (exit 2: ${message:0:110})"
 else
   echo "FAIL free_bodies/free_bodies_need_the_resolved_fluid: exit $status, message '$message'"
+fi
+sed 's/0.2153589838e-3, 0.19e-3/0.2653589838e-3, 0.29e-3/' bodies.csv > overlap.csv
+sed "s/bodies.csv/overlap.csv/; s/directory = 'file'/directory = 'overlap'/" file.nml > overlap.nml
+mpirun -np 2 "$AGGLO" overlap.nml > overlap.out 2>&1; status=$?
+message=$(grep -m1 'agglo: error' overlap.out)
+if [ "$status" -eq 2 ] && [[ $message == *'&bodies centre(:, 3) = a body overlapping body 1 (gap -'* ]] \
+   && [ "$(grep -c 'agglo: error' overlap.out)" -eq 1 ]; then
+  echo "PASS free_bodies/overlapping_bodies_refused_on_two_ranks  (exit 2, one message: ${message:0:100})"
+else
+  echo "FAIL free_bodies/overlapping_bodies_refused_on_two_ranks: exit $status, message '$message'"
 fi
