@@ -1,4 +1,4 @@
-!> Agglo main program: read the deck -> prepare the run -> run the scene it switches on.
+!> Agglo main program: read the deck -> prepare the run -> the scene loop runs what it switches on.
 !> Command line: agglo DECK.nml [--set group.variable=value]... [--print-deck]
 !>   --set          overrides a deck variable (value as written in a deck); checked like the deck
 !>   --print-deck   checks the deck with the overrides and prints its text with the overrides
@@ -14,9 +14,7 @@ program agglo
   use run_directory, only: prepare_run_directory, run_file
   use run_header, only: log_run_header
   use hdf5_files, only: h5_finalize
-  use resolved_scene, only: run_resolved_scene
-  use pair_scene, only: run_pair_scene
-  use resolved_pair_scene, only: run_resolved_pair_scene
+  use scene_loop, only: run_scene
   implicit none
   character(len=*), parameter :: usage = 'usage: agglo DECK.nml [--set group.variable=value]... [--print-deck]'// &
       '   (run with mpirun -np N for N ranks; docs/decks.md)'
@@ -43,16 +41,7 @@ program agglo
   call log_open(run_file('agglo.log'))
   call log_run_header(cfg)
 
-  select case (trim(cfg%scene%fluid))
-  case ('resolved')
-    if (cfg%scene%particles == 'pair') then
-      call run_resolved_pair_scene(cfg)
-    else
-      call run_resolved_scene(cfg)
-    end if
-  case default
-    call run_pair_scene(cfg)
-  end select
+  call run_scene(cfg)   ! the one time loop of every scene (driver/scene_loop)
 
   call log_line('agglo: run complete; outputs in '//run_file(''))
   call log_close()

@@ -23,7 +23,8 @@ module released_sphere_case
                              particle_system_interact, particle_system_step, particle_loads_zero
   use immersed_boundary, only: ibm_settings_t
   use immersed_geometry, only: node_fluid
-  use resolved_hydrodynamics, only: resolved_hydrodynamics_t, resolved_hydrodynamics_create
+  use resolved_hydrodynamics, only: resolved_hydrodynamics_t, resolved_hydrodynamics_create, &
+                                    resolved_hydrodynamics_options_t
   use unsteady_stokes, only: released_sphere_t, particle_response_time, released_start_velocity, release_decay_quadrature
   implicit none
   private
@@ -115,8 +116,8 @@ contains
     settings%tolerance = 1.0e-12_wp
     settings%max_sweeps = 100
     settings%fluid_density = density
-    call resolved_hydrodynamics_create(provider, solver, system, settings, 'momentum', -1, case%stabilise, &
-                                       restart=.false., gravity=[0.0_wp, 0.0_wp, 0.0_wp], explicit_history=case%history)
+    call resolved_hydrodynamics_create(provider, solver, system, resolved_hydrodynamics_options_t(settings=settings, &
+                                       stabilise=case%stabilise, explicit_history=case%history))
     call provider%prepare(solver, system)
     loads = particle_loads_zero(1)
 

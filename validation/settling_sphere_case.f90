@@ -43,7 +43,8 @@ module settling_sphere_case
                              particle_system_interact, particle_system_step, particle_loads_zero
   use immersed_boundary, only: ibm_settings_t
   use immersed_geometry, only: node_fluid
-  use resolved_hydrodynamics, only: resolved_hydrodynamics_t, resolved_hydrodynamics_create
+  use resolved_hydrodynamics, only: resolved_hydrodynamics_t, resolved_hydrodynamics_create, &
+                                    resolved_hydrodynamics_options_t
   implicit none
   private
   public :: settling_case_t, settling_result_t, run_settling_sphere, periodic_slip_reference, drift_angle_degrees
@@ -152,8 +153,8 @@ contains
     settings%tolerance = 1.0e-12_wp
     settings%max_sweeps = 100
     settings%fluid_density = density
-    call resolved_hydrodynamics_create(provider, solver, system, settings, 'momentum', -1, case%stabilise, &
-                                       restart=.false., gravity=gravity)
+    call resolved_hydrodynamics_create(provider, solver, system, resolved_hydrodynamics_options_t(settings=settings, &
+                                       stabilise=case%stabilise, gravity=gravity))
     call provider%prepare(solver, system)
     loads = particle_loads_zero(1)
     dt = case%viscous_number * solver%grid%dx**2 / viscosity

@@ -45,7 +45,8 @@ module squeeze_case
                              particle_system_interact, particle_system_step, particle_loads_zero, &
                              particle_system_set_added_inertia
   use lubrication, only: lubrication_model_t
-  use resolved_hydrodynamics, only: resolved_hydrodynamics_t, resolved_hydrodynamics_create
+  use resolved_hydrodynamics, only: resolved_hydrodynamics_t, resolved_hydrodynamics_create, &
+                                    resolved_hydrodynamics_options_t
   implicit none
   private
   public :: squeeze_case_t, squeeze_result_t, run_squeeze, brenner_squeeze_coefficient, squeeze_speed, &
@@ -298,8 +299,7 @@ contains
     settings%tolerance = 1.0e-12_wp
     settings%max_sweeps = case%max_sweeps
     settings%fluid_density = density
-    call resolved_hydrodynamics_create(provider, solver, system, settings, 'momentum', -1, stabilise=.true., &
-                                       restart=.false., gravity=[0.0_wp, 0.0_wp, 0.0_wp])
+    call resolved_hydrodynamics_create(provider, solver, system, resolved_hydrodynamics_options_t(settings=settings))
     ! The push as the provider's constant external force per body (its net-weight slot): it enters
     ! the added-mass update like a weight, and sums to zero over the pair, so the box needs no drive.
     history%push = 6.0_wp * pi * density * viscosity * radius * (case%push_reynolds * viscosity / radius)   ! U_p

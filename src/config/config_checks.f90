@@ -111,8 +111,8 @@ contains
         ''''//trim(cfg%scene%forcing)//''' with fluid = '''//trim(cfg%scene%fluid)//'''', '''none'' unless '// &
         'fluid = ''resolved'' (the forcing drives the resolved fluid; a fluid-free or Stokes scene has no '// &
         'velocity field)')
-    if (cfg%scene%fluid == 'resolved' .and. cfg%scene%particles == 'pair') call check_resolved_pair_cross(cfg)
-    if (cfg%scene%added_mass .and. .not. (cfg%scene%fluid == 'resolved' .and. cfg%scene%particles == 'pair')) &
+    if (cfg%scene%fluid == 'resolved' .and. free_particles(cfg)) call check_resolved_pair_cross(cfg)
+    if (cfg%scene%added_mass .and. .not. (cfg%scene%fluid == 'resolved' .and. free_particles(cfg))) &
       call input_error('scene', 'added_mass', '.true. with fluid = '''//trim(cfg%scene%fluid)//''' and particles = '''// &
                        trim(cfg%scene%particles)//'''', '.false. (the added mass belongs to particle_coupling = '// &
                        '''point'' or ''resolved'' of the pair in the resolved fluid)')
@@ -126,11 +126,12 @@ contains
     if (cfg%pair%hydrodynamics_from /= 'start' .and. cfg%scene%fluid == 'none') call input_error('pair', &
         'hydrodynamics_from', ''''//trim(cfg%pair%hydrodynamics_from)//''' with &scene fluid = ''none''', &
         '''start'' (without a fluid there are no hydrodynamic loads to switch on)')
-    if (any(cfg%pair%gravity /= 0.0_wp) .and. .not. (cfg%scene%fluid == 'resolved' .and. cfg%scene%particles == 'pair' &
+    if (any(cfg%pair%gravity /= 0.0_wp) .and. .not. (cfg%scene%fluid == 'resolved' .and. free_particles(cfg) &
         .and. cfg%scene%particle_coupling == 'resolved')) call input_error('pair', 'gravity', 'non-zero without '// &
         '&scene fluid = ''resolved'', particles = ''pair'', particle_coupling = ''resolved''', '0, 0, 0 (gravity '// &
         'acts on the particles resolved by the immersed boundary only)')
     if (cfg%scene%particles == 'prescribed') call check_prescribed_cross(cfg)
+    if (cfg%scene%particles == 'free') call check_free_cross(cfg)
     if (cfg%scene%fluid /= 'resolved' .and. cfg%scene%particles == 'none') call input_error('scene', &
         'particles', '''none'' with fluid = '''//trim(cfg%scene%fluid)//'''', &
         '''pair'' (a fluid-free or Stokes scene has nothing to compute without particles)')
@@ -174,6 +175,28 @@ contains
     ! Then where it is (a pair too large for the box is the more basic error).
     if (cfg%pair%centre == 'given') call require_in_box('pair', 'centre_position', cfg%pair%centre_position, cfg)
   end subroutine check_pair_in_box
+
+  !> The scene's particles move under their loads (the pair, or free bodies placed by &bodies).
+  logical function free_particles(cfg)
+    type(agglo_config_t), intent(in) :: cfg
+    free_particles = cfg%scene%particles == 'pair' .or. cfg%scene%particles == 'free'
+  end function free_particles
+
+  !> Free bodies placed by &bodies: in the resolved fluid (the point or resolved provider), starting
+  !> with the deck's velocities; an oscillation is prescribed motion, which free bodies do not have.
+  subroutine check_free_cross(cfg)
+    type(agglo_config_t), intent(in) :: cfg
+    integer :: n
+    if (cfg%scene%fluid /= 'resolved') call input_error('scene', 'particles', '''free'' with fluid = '''// &
+        trim(cfg%scene%fluid)//'''', 'fluid = ''resolved'' (free bodies of any count run in the resolved fluid; '// &
+        'fluid-free and Stokes scenes run the pair)')
+    do n = 1, cfg%bodies%count
+      if (any(cfg%bodies%oscillation_amplitude(:, n) /= 0.0_wp) .or. cfg%bodies%oscillation_frequency(n) /= 0.0_wp) &
+        call input_error('bodies', 'oscillation_frequency('//int_text(n)//')', &
+                         real_text(cfg%bodies%oscillation_frequency(n))//' (or a non-zero oscillation_amplitude)', &
+                         '0 with &scene particles = ''free'' (free bodies move under their loads, not a prescribed motion)')
+    end do
+  end subroutine check_free_cross
 
   !> Bodies in prescribed motion: resolved fluid (either viscous scheme: with Crank-Nicolson the
   !> predictor's system holds the body rows, immersed_predictor; any forcing).

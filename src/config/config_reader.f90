@@ -70,8 +70,9 @@ contains
     ! The lubrication hand-over gap is counted in &grid cells in every scene.
     if (cfg%scene%fluid == 'resolved' .or. cfg%collision%lubrication) call check_grid_group(cfg%grid)
     if (cfg%scene%forcing /= 'none') call check_forcing_group(cfg%forcing)
-    if (cfg%scene%particles == 'prescribed') call check_bodies_group(cfg%bodies)
-    if (cfg%scene%particles == 'pair') then
+    if (cfg%scene%particles == 'prescribed' .or. cfg%scene%particles == 'free') call check_bodies_group(cfg%bodies)
+    ! Free bodies take their material, integrator and DLVO radius from &pair (docs/decks.md, &bodies).
+    if (cfg%scene%particles == 'pair' .or. cfg%scene%particles == 'free') then
       call check_pair_group(cfg%pair)
       if (cfg%scene%dlvo) call check_dlvo_group(cfg%dlvo)
       if (cfg%scene%collisions .or. cfg%collision%lubrication) call check_collision_group(cfg%collision)

@@ -10,7 +10,7 @@ module deck_file
   use text_format, only: real_text, int_text   ! passed on to the config modules
   implicit none
   private
-  public :: deck_t, deck_load, deck_check_groups, deck_group_close, lower, &
+  public :: deck_t, deck_load, text_file_load, deck_check_groups, deck_group_close, lower, &
             check_namelist_read, require_positive, require_nonnegative, require_range, require_option, &
             require_positive_int, real_text, int_text
 
@@ -29,6 +29,18 @@ contains
   subroutine deck_load(path, deck)
     character(len=*), intent(in) :: path
     type(deck_t), intent(out) :: deck
+    logical :: readable
+    call text_file_load(path, deck%lines, readable)
+    if (.not. readable) call fatal('deck: cannot read the input deck "'//trim(path)//'" (missing or unreadable file)')
+    deck%path = path
+  end subroutine deck_load
+
+  !> The lines of a text file the deck names, read on rank 0 and broadcast to every rank
+  !> (collective; readable is the same on every rank, and lines one blank line when it is false).
+  subroutine text_file_load(path, lines, readable)
+    character(len=*), intent(in) :: path
+    character(len=:), allocatable, intent(out) :: lines(:)
+    logical, intent(out) :: readable
     integer :: rank, unit, ios, counts(2), i
     logical :: exists
     character(len=:), allocatable :: line
@@ -50,20 +62,20 @@ contains
       end if
     end if
     call MPI_Bcast(counts, 2, MPI_INTEGER, 0, MPI_COMM_WORLD)
-    if (counts(1) < 0) call fatal('deck: cannot read the input deck "'//trim(path)//'" (missing or unreadable file)')
-    allocate(character(len=max(counts(2), 1)) :: deck%lines(max(counts(1), 1)))
-    deck%lines = ''
+    readable = counts(1) >= 0
+    allocate(character(len=max(counts(2), 1)) :: lines(max(counts(1), 1)))
+    lines = ''
+    if (.not. readable) return
     if (rank == 0) then
       open(newunit=unit, file=path, status='old', action='read')
       do i = 1, counts(1)
         call read_whole_line(unit, line, ios)
-        deck%lines(i) = line
+        lines(i) = line
       end do
       close(unit)
     end if
-    call MPI_Bcast(deck%lines, len(deck%lines) * size(deck%lines), MPI_CHARACTER, 0, MPI_COMM_WORLD)
-    deck%path = path
-  end subroutine deck_load
+    call MPI_Bcast(lines, len(lines) * size(lines), MPI_CHARACTER, 0, MPI_COMM_WORLD)
+  end subroutine text_file_load
 
   !> The deck's syntax, beyond what a namelist read checks (a namelist read skips whatever it was
   !> not asked for, so each of these would otherwise drop values without a word):

@@ -1,5 +1,5 @@
-!> &scene particle_coupling = 'point': the hydrodynamic-load provider of the resolved pair scene
-!> for point particles (module pair_hydrodynamics; the physics in coupling/point_particle_coupling).
+!> &scene particle_coupling = 'point': the hydrodynamic-load provider of the bodies in the resolved
+!> fluid as point particles (module particle_hydrodynamics; the physics in coupling/point_particle_coupling).
 !> The fluid step is the particle-free one (forced_fluid_advance: the same fused step as the
 !> resolved scene without bodies); the fluid is sampled at the bodies' centres before and after it,
 !> and the sub-steps read it interpolated linearly in time between u^n and u^n+1.
@@ -10,13 +10,13 @@ module point_hydrodynamics
   use particle_system, only: particle_system_t, particle_loads_t
   use point_particle_coupling, only: point_coupling_t, point_fluid_t, point_coupling_create, point_coupling_sample, &
                                      point_fluid_at, point_body_loads, sample_start, sample_end
-  use pair_hydrodynamics, only: pair_hydrodynamics_t
+  use particle_hydrodynamics, only: particle_hydrodynamics_t
   use rigid_body, only: added_inertia_t
   implicit none
   private
   public :: point_hydrodynamics_t, point_hydrodynamics_create
 
-  type, extends(pair_hydrodynamics_t) :: point_hydrodynamics_t
+  type, extends(particle_hydrodynamics_t) :: point_hydrodynamics_t
     type(point_coupling_t) :: coupling
   contains
     procedure :: prepare => point_prepare

@@ -1,12 +1,12 @@
-!> &scene particle_coupling = 'resolved': the hydrodynamic-load provider of the resolved pair scene
-!> (module pair_hydrodynamics) for free particles resolved by the immersed boundary (docs/theory.md,
+!> &scene particle_coupling = 'resolved': the hydrodynamic-load provider of the scene loop
+!> (module particle_hydrodynamics) for free particles resolved by the immersed boundary (docs/theory.md,
 !> "Free particles"; docs/design.md, "The pair in the resolved fluid").
 !>
 !> Fluid step t^n -> t^{n+1}: the bodies are placed where the particle state predicts them at
 !> t^{n+1} (centre x^n + U^n dt, orientation turned by Omega^n dt) and move with the state's U^n,
 !> Omega^n, the latest known velocities; the immersed scene's staged step (immersed_step) imposes
-!> them and returns the momentum-balance force and torque F^n, T^n. The placement error, O(a dt^2),
-!> is some 1e-8 of a cell at the fluid's step; the one-step lag of the velocities is what the
+!> them and returns the momentum-balance force and torque F^n, T^n. The placement error is
+!> O(a dt^2) (docs/theory.md, "Free particles"); the one-step lag of the velocities is what the
 !> added-mass stabilisation below is about. The loads stay frozen over the fluid step's
 !> particle_substeps sub-steps (closest points, DLVO and collisions every sub-step).
 !>
@@ -26,8 +26,8 @@
 !> (resolved_impulse_inertia; module rigid_body, "Impulses in a fluid"). With the body's mass alone,
 !> the impulse that holds a body against its attraction F_other would be m / (m + M_a) of the
 !> attraction's; two bodies whose M_a along the normal differ cannot both be held by one equal and
-!> opposite impulse, and the held pair drifts under the difference (a face-on calcite disk against
-!> an edge-on one: 0.475 F_other; docs/theory.md, "Contact impulses with the added mass").
+!> opposite impulse, and the held pair drifts under the difference (docs/theory.md, "Contact
+!> impulses with the added mass").
 !>
 !> Long fluid steps (&fluid viscous_scheme = 'crank_nicolson'; docs/theory.md, "Crank-Nicolson with
 !> free particles"): the ghost and interior rows of the predictor's system (immersed_predictor) hold
@@ -47,15 +47,14 @@
 !> With explicit diffusion C and L are zero and the step is the added-mass one above unchanged.
 !> Sub-steps: the particle sub-steps of a long fluid step integrate the frozen load as before; the
 !> placement x^n + U^n dt differs from the particles' x^{n+1} by a dt^2 / 2, and after a collision
-!> within the step by up to the velocity jump times dt / 2 (about 1e-2 of a cell for the validation's
-!> pair at 5 times the explicit bound); the next step places the bodies where the particles are.
+!> within the step by up to the velocity jump times dt / 2; the next step places the bodies where
+!> the particles are.
 !>
 !> History with explicit diffusion (&scene added_mass_history; docs/theory.md, "History with explicit
 !> diffusion"): the explicit predictor diffuses u^n, which does not yet hold the velocity the step
 !> imposes, so the resolved viscous reaction to a velocity change starts one fluid step after it
-!> (a sphere held at U_0 after the release receives 0.196, 0.097, 0.058, 0.043 m U_0 in its first
-!> steps at D/dx = 8, nu dt/dx^2 = 0.06, ratio 2.72, against the unsteady Stokes 0.304, 0.054,
-!> 0.043, 0.037: the added mass within the step, the sqrt(t) history one step late). Then the
+!> (the added mass within the step, the sqrt(t) history one step late; measured in docs/theory.md,
+!> "History with explicit diffusion"). Then the
 !> estimate is M = M_a + M_B (the drag stays with the resolved load, history_lag = 1) and the
 !> put-back weighs the resolved history of a change j steps back with w_{j-1} instead of w_j
 !> (function put_back). The start's jump from the fluid at rest, which the injection leaves to the
@@ -71,12 +70,13 @@
 !> A^{n-j} (Crank-Nicolson's history estimate) and the loads; all go into the checkpoint
 !> (resolved_write_checkpoint), the geometry is recomputed from the particle state every step.
 module resolved_hydrodynamics
-  use agglo_kinds, only: wp
+  use agglo_kinds, only: wp, i8
   use error_handling, only: fatal
   use physical_constants, only: pi
   use logger, only: log_line
   use text_format, only: real_text, int_text
   use checkpoint_files, only: checkpoint_t
+  use run_directory, only: run_file
   use hdf5_files, only: h5_exists
   use hdf5_datasets, only: h5_read_scalar, h5_write_array, h5_read_array
   use fluid_solver, only: fluid_solver_t
@@ -91,18 +91,43 @@ module resolved_hydrodynamics
   use immersed_placement, only: ibm_set_bodies
   use immersed_imposition, only: ibm_impose
   use immersed_diagnostics, only: ibm_fallback_rows
-  use immersed_scene, only: immersed_scene_t, prescribed_motion_t, immersed_scene_create, immersed_step
-  use pair_hydrodynamics, only: pair_hydrodynamics_t
+  use immersed_scene, only: immersed_scene_t, prescribed_motion_t, immersed_scene_create, immersed_step, loads_open, &
+                            loads_write, loads_close
+  use particle_hydrodynamics, only: particle_hydrodynamics_t
   use rigid_body, only: angular_velocity_lab, added_inertia_t
   use hypre_solver, only: linear_solver_config_t
+  use added_mass_estimate, only: lagged_reaction, put_back
   implicit none
   private
-  public :: resolved_hydrodynamics_t, resolved_hydrodynamics_create, rotational_added_inertia
+  public :: resolved_hydrodynamics_t, resolved_hydrodynamics_options_t, resolved_hydrodynamics_create, &
+            rotational_added_inertia
+
+  !> How the provider is built (resolved_hydrodynamics_create).
+  type :: resolved_hydrodynamics_options_t
+    !> The imposition (&scene ibm_coupling, &bodies ghost_tolerance, max_sweeps; the fluid density)
+    type(ibm_settings_t) :: settings
+    !> The loads handed on, as immersed_scene_create takes them (&bodies load_method): 'momentum' | 'surface'
+    character(len=16) :: load_method = 'momentum'
+    !> The face sum's icosphere level (&bodies mesh_level with load_method = 'surface' or
+    !> compare_loads); -1: no face sum
+    integer :: surface_level = -1
+    logical :: stabilise = .true.                  !< the added-mass stabilisation (&scene added_mass)
+    logical :: restart = .false.                   !< the fluid already holds the bodies (a restart)
+    real(wp) :: gravity(3) = 0                     !< m/s^2 (module header, "Gravity")
+    !> The hypre solve of the Crank-Nicolson predictor with the body rows (&fluid predictor_tolerance,
+    !> predictor_max_iterations; unused with explicit diffusion)
+    type(linear_solver_config_t) :: predictor_config = linear_solver_config_t(method='bicgstab', &
+        preconditioner='user', tolerance=1.0e-8_wp, max_iterations=200)
+    !> &bodies geometry = 'mesh': the icosphere level of the surface the ghost nodes see (20 4^level
+    !> faces, inside the spheroid); -1: the analytic spheroid
+    integer :: geometry_level = -1
+    logical :: explicit_history = .false.          !< &scene added_mass_history (explicit diffusion only)
+  end type resolved_hydrodynamics_options_t
 
   !> Fluid steps of velocity changes the history reaction's estimate remembers (Crank-Nicolson).
   integer, parameter :: history_steps = 32
 
-  type, extends(pair_hydrodynamics_t) :: resolved_hydrodynamics_t
+  type, extends(particle_hydrodynamics_t) :: resolved_hydrodynamics_t
     type(immersed_scene_t) :: scene
     logical :: stabilise = .true.                      !< the added-mass stabilisation (&scene added_mass)
     logical :: inject = .true.                         !< set the fluid inside the bodies to their motion (a start)
@@ -143,34 +168,22 @@ module resolved_hydrodynamics
     procedure :: loads => resolved_loads
     procedure :: write_checkpoint => resolved_write_checkpoint
     procedure :: read_checkpoint => resolved_read_checkpoint
-    procedure :: progress_text => resolved_progress_text
+    procedure :: log_progress => resolved_log_progress
+    procedure :: open_outputs => resolved_open_outputs
+    procedure :: record_fluid_step => resolved_record_fluid_step
+    procedure :: finish => resolved_finish
     procedure :: impulse_inertia => resolved_impulse_inertia
   end type resolved_hydrodynamics_t
 
 contains
 
-  !> The provider for the system's bodies in the solver's fluid (collective: classifies the grid).
-  !> settings: the imposition (&scene ibm_coupling, &bodies ghost_tolerance, max_sweeps);
-  !> load_method, surface_level: as immersed_scene_create (&bodies load_method, mesh_level);
-  !> stabilise: the added-mass stabilisation; restart: the fluid already holds the bodies;
-  !> gravity: m/s^2 (module header); predictor_config: the hypre solve of the Crank-Nicolson
-  !> predictor (&fluid predictor_tolerance, predictor_max_iterations; immersed_scene_create's default
-  !> when absent); geometry_level: &bodies geometry = 'mesh', the icosphere level of the surface
-  !> the ghost nodes see (20 4^level faces, inside the spheroid; absent or -1: the analytic spheroid).
-  subroutine resolved_hydrodynamics_create(provider, solver, system, settings, load_method, surface_level, &
-                                           stabilise, restart, gravity, predictor_config, geometry_level, &
-                                           explicit_history)
+  !> The provider for the system's bodies in the solver's fluid (collective: classifies the grid),
+  !> as the options say (resolved_hydrodynamics_options_t).
+  subroutine resolved_hydrodynamics_create(provider, solver, system, options)
     type(resolved_hydrodynamics_t), intent(out) :: provider
     type(fluid_solver_t), intent(inout) :: solver
     type(particle_system_t), intent(in) :: system
-    type(ibm_settings_t), intent(in) :: settings
-    character(len=*), intent(in) :: load_method
-    integer, intent(in) :: surface_level
-    logical, intent(in) :: stabilise, restart
-    real(wp), intent(in) :: gravity(3)
-    type(linear_solver_config_t), intent(in), optional :: predictor_config
-    integer, intent(in), optional :: geometry_level
-    logical, intent(in), optional :: explicit_history
+    type(resolved_hydrodynamics_options_t), intent(in) :: options
     type(prescribed_motion_t), allocatable :: motion(:)
     real(wp) :: k(2), fluid_mass, ratio_translation, ratio_rotation
     type(stokes_resistance_t) :: resistance
@@ -186,14 +199,10 @@ contains
     provider%rotational_history_length = provider%translational_resistance
     provider%viscosity = solver%viscosity
     provider%history_lag = 0
-    if (present(explicit_history)) then
-      if (explicit_history .and. .not. solver%crank_nicolson) provider%history_lag = 1
-    end if
+    if (options%explicit_history .and. .not. solver%crank_nicolson) provider%history_lag = 1
     ratio_translation = 0
     ratio_rotation = 0
-    if (present(geometry_level)) then
-      if (geometry_level >= 0) allocate(provider%meshes(system%n))
-    end if
+    if (options%geometry_level >= 0) allocate(provider%meshes(system%n))
     do i = 1, system%n
       call require_thick_enough(system%shapes(i), solver)
       ! At rest where the particle is: the scene's first placement; every step places the bodies anew.
@@ -201,11 +210,11 @@ contains
       motion(i)%centre = system%bodies(i)%position
       motion(i)%orientation = system%bodies(i)%quaternion
       if (allocated(provider%meshes)) then
-        call build_icosphere_mesh(system%shapes(i), geometry_level, provider%meshes(i))
+        call build_icosphere_mesh(system%shapes(i), options%geometry_level, provider%meshes(i))
         motion(i)%mesh = provider%meshes(i)
       end if
       fluid_mass = solver%density * system%shapes(i)%volume
-      provider%weight(:, i) = (system%bodies(i)%mass - fluid_mass) * gravity
+      provider%weight(:, i) = (system%bodies(i)%mass - fluid_mass) * options%gravity
       k = spheroid_added_mass_coefficients(system%shapes(i)%a, system%shapes(i)%b)
       provider%added_mass(:, i) = fluid_mass * [k(1), k(2), k(2)]
       provider%added_inertia(:, i) = [0.0_wp, 1.0_wp, 1.0_wp] * &
@@ -223,9 +232,9 @@ contains
       ratio_translation = max(ratio_translation, maxval(provider%added_mass(:, i)) / system%bodies(i)%mass)
       ratio_rotation = max(ratio_rotation, maxval(provider%added_inertia(:, i) / system%bodies(i)%inertia_body))
     end do
-    call immersed_scene_create(provider%scene, solver, motion, settings, &
+    call immersed_scene_create(provider%scene, solver, motion, options%settings, &
                                -sum(provider%weight, dim=2) / (provider%box(1) * provider%box(2) * provider%box(3)), &
-                               load_method, surface_level, predictor_config)
+                               options%load_method, options%surface_level, options%predictor_config)
     allocate(provider%force(3, system%n), provider%torque(3, system%n))
     provider%force = 0
     provider%torque = 0
@@ -243,27 +252,27 @@ contains
              provider%earlier_angular_acceleration(3, system%n, history_steps))
     provider%earlier_acceleration = 0
     provider%earlier_angular_acceleration = 0
-    provider%stabilise = stabilise
-    provider%inject = .not. restart
+    provider%stabilise = options%stabilise
+    provider%inject = .not. options%restart
     call log_line('resolved particles: largest added mass / mass '//real_text(ratio_translation)// &
         ', added inertia / inertia '//real_text(ratio_rotation)//' (potential flow); added-mass stabilisation '// &
-        merge('on ', 'off', stabilise))
-    if (.not. stabilise .and. max(ratio_translation, ratio_rotation) >= 1.0_wp) call log_line('resolved particles: '// &
+        merge('on ', 'off', options%stabilise))
+    if (.not. options%stabilise .and. max(ratio_translation, ratio_rotation) >= 1.0_wp) call log_line('resolved particles: '// &
         'warning: an added mass or inertia above the body''s own with the stabilisation off: the lagged loads '// &
         'amplify a disturbance by that ratio per fluid step (unstable; &scene added_mass = .true.)')
-    if (solver%crank_nicolson .and. stabilise) call log_line('resolved particles: Crank-Nicolson: the '// &
+    if (solver%crank_nicolson .and. options%stabilise) call log_line('resolved particles: Crank-Nicolson: the '// &
         'stabilisation''s estimate adds the Stokes drag C dt and the history reaction C L 2 sqrt(dt / (pi nu)) '// &
         'over the last '//int_text(history_steps)//' fluid steps (docs/theory.md)')
-    if (provider%history_lag > 0 .and. stabilise) call log_line('resolved particles: explicit diffusion: the '// &
+    if (provider%history_lag > 0 .and. options%stabilise) call log_line('resolved particles: explicit diffusion: the '// &
         'stabilisation''s estimate adds the history reaction C L 2 sqrt(dt / (pi nu)), the resolved one arriving one '// &
         'fluid step later (&scene added_mass_history; docs/theory.md)')
-    if (solver%crank_nicolson .and. .not. stabilise) call log_line('resolved particles: warning: Crank-Nicolson '// &
+    if (solver%crank_nicolson .and. .not. options%stabilise) call log_line('resolved particles: warning: Crank-Nicolson '// &
         'without the stabilisation: at long steps the lagged drag and history reaction can exceed the body''s mass '// &
         '(unstable; &scene added_mass = .true.)')
   end subroutine resolved_hydrodynamics_create
 
   !> A body thinner than 4 cells is refused with the grid it needs: the ghost layers of its opposite
-  !> faces would overlap (ibm-notes section 0; the same rule as for the &bodies group).
+  !> faces would overlap (docs/theory.md, "Thin bodies"; the same rule as for the &bodies group).
   subroutine require_thick_enough(shape, solver)
     type(spheroid_t), intent(in) :: shape
     type(fluid_solver_t), intent(in) :: solver
@@ -454,80 +463,11 @@ contains
     end do
   end function resolved_impulse_inertia
 
-  !> The lagged reaction's estimate per body axis (kg, or kg m^2 for rotation; module header):
-  !> the impulse / velocity change of a body whose velocity steps at the start of a fluid step,
-  !> integrated over the step, M + C dt + C L 2 sqrt(dt / (pi nu)): potential flow, quasi-steady
-  !> drag and the history (Basset) reaction C L / sqrt(pi nu t), the last also returned as history.
-  !> With the viscous reaction trailing by lag > 0 steps (explicit diffusion) the drag stays with the
-  !> resolved load: taken implicitly it would move momentum the fluid delivers lag steps later.
-  pure subroutine lagged_reaction(added, resistance, length, dt, viscosity, lag, reaction, history)
-    real(wp), intent(in) :: added(3), resistance(3), length(3), dt, viscosity
-    integer, intent(in) :: lag
-    real(wp), intent(out) :: reaction(3), history(3)
-    history = 0
-    if (dt > 0.0_wp .and. viscosity > 0.0_wp) history = resistance * 2.0_wp * length * sqrt(dt / (pi * viscosity))
-    reaction = added + history
-    if (lag == 0) reaction = reaction + resistance * dt
-  end subroutine lagged_reaction
-
-  !> The estimate put back into the lagged load (body frame): the reaction the last step's velocity
-  !> change A^n caused, less what the history reaction of each change still holds in the next step
-  !> (the Basset weights w_j = sqrt(j + 1) - sqrt(j) of a velocity step j steps back), over the
-  !> N = history_steps steps remembered. The resolved history reaction to a change j steps back is
-  !> h_j = w_{j - lag} (zero for j < lag: explicit diffusion first sees a change in the step after it),
-  !> the estimate's g_j = w_j, taken implicitly at j = 0; what the next step needs explicitly is g_{j+1}:
-  !>   (lagged - history) A^n + history [sum_{j=0}^{N} (h_j - g_{j+1}) A^{n-j} + (h_s - g_s) A_start],
-  !> lag 0 (Crank-Nicolson): lagged A^n - history [w_1 A^n - sum_{j=1}^{N-1} (w_j - w_{j+1}) A^{n-j} - w_N A^{n-N}].
-  !> The start (lag > 0 only; its records are zero otherwise), s = since_start - 1 steps back: the
-  !> jump from the fluid at rest A_start, whose implicit part was never taken (the resolved load
-  !> holds its added mass), with the weights h_s - g_s (-1 at the first step, summing to zero), and
-  !> the change of the second step, A_first, with those of a change s - 1 steps back, kept for the
-  !> whole run: the start's changes are the largest, and leaving the memory with their remaining
-  !> weight at once they would jump the velocity (1.3% of U_0 at the density ratio 1).
-  pure function put_back(lagged, history, current, earlier, rotation, lag, start, first, since_start) result(estimate)
-    real(wp), intent(in) :: lagged(3), history(3), current(3), earlier(:, :), rotation(3, 3), start(3), first(3)
-    integer, intent(in) :: lag, since_start
-    real(wp) :: estimate(3), past(3)
-    integer :: j, last
-    last = size(earlier, 2)
-    past = history_weight(0, lag, last) * current
-    do j = 1, last
-      past = past + history_weight(j, lag, last) * earlier(:, j)
-    end do
-    if (since_start >= 1) past = past + (resolved_weight(since_start - 1, lag) - basset_weight(since_start - 1)) * start
-    if (since_start >= 2) past = past + (resolved_weight(since_start - 2, lag) - basset_weight(since_start - 1)) * first
-    estimate = (lagged - history) * matmul(current, rotation) + history * matmul(past, rotation)
-    if (since_start == 2) estimate = estimate + (lagged - history) * matmul(first, rotation)
-  end function put_back
-
-  !> h_j - g_{j+1} of put_back; the change that leaves the memory (j = last) takes its remaining
-  !> weight along, sqrt(last + 1) - sqrt(last - lag), so that the weights put back sum to lagged, the
-  !> velocity changes telescope and the box's momentum budget closes.
-  pure real(wp) function history_weight(j, lag, last) result(weight)
-    integer, intent(in) :: j, lag, last
-    if (j == last) then
-      weight = sqrt(real(last + 1, wp)) - sqrt(real(last - lag, wp))
-    else
-      weight = resolved_weight(j, lag) - basset_weight(j + 1)
-    end if
-  end function history_weight
-
-  !> h_j: the resolved history reaction j steps after a change, trailing by lag steps.
-  pure real(wp) function resolved_weight(j, lag) result(weight)
-    integer, intent(in) :: j, lag
-    weight = 0
-    if (j >= lag) weight = basset_weight(j - lag)
-  end function resolved_weight
-
-  pure real(wp) function basset_weight(j)
-    integer, intent(in) :: j
-    basset_weight = sqrt(real(j + 1, wp)) - sqrt(real(j, wp))
-  end function basset_weight
-
   !> The last step's ghost-row sweeps (near contact the two bodies' rows couple and need more) and
-  !> the bodies' force magnitudes.
-  function resolved_progress_text(self) result(text)
+  !> the bodies' force magnitudes, in the progress log.
+  subroutine resolved_log_progress(self, solver)
     class(resolved_hydrodynamics_t), intent(in) :: self
+    type(fluid_solver_t), intent(in) :: solver
     character(len=:), allocatable :: text
     integer :: i
     text = '  immersed boundary: sweeps '//int_text(self%scene%predicted%sweeps)//', residual '// &
@@ -537,11 +477,35 @@ contains
     end do
     text = text//' N, fallback rows '//int_text(self%fallbacks)//' (saturated '//int_text(self%saturated)// &
            '; most '//int_text(self%most_fallbacks)//', '//int_text(self%most_saturated)//')'
-  end function resolved_progress_text
+    call log_line(text)
+  end subroutine resolved_log_progress
+
+  !> bodies_loads.dat in the run directory: the immersed boundary's own force and torque on each
+  !> body after every fluid step (before the added-mass stabilisation; docs/outputs.md).
+  subroutine resolved_open_outputs(self, append, last_step)
+    class(resolved_hydrodynamics_t), intent(inout) :: self
+    logical, intent(in) :: append
+    integer(i8), intent(in) :: last_step
+    call loads_open(self%scene, run_file('bodies_loads.dat'), append=append, last_step=last_step)
+  end subroutine resolved_open_outputs
+
+  !> The immersed boundary's own loads of the step just taken in bodies_loads.dat (if opened).
+  subroutine resolved_record_fluid_step(self, solver)
+    class(resolved_hydrodynamics_t), intent(inout) :: self
+    type(fluid_solver_t), intent(in) :: solver
+    call loads_write(self%scene, solver%step, solver%time)
+  end subroutine resolved_record_fluid_step
+
+  subroutine resolved_finish(self, solver, steps)
+    class(resolved_hydrodynamics_t), intent(inout) :: self
+    type(fluid_solver_t), intent(in) :: solver
+    integer(i8), intent(in) :: steps
+    call loads_close(self%scene)
+  end subroutine resolved_finish
 
   !> The provider's state across fluid steps (group resolved_hydrodynamics of the transaction).
   subroutine resolved_write_checkpoint(self, transaction)
-    class(resolved_hydrodynamics_t), intent(in) :: self
+    class(resolved_hydrodynamics_t), intent(inout) :: self
     type(checkpoint_t), intent(in) :: transaction
     associate (file => transaction%file)
       call h5_write_array(file, 'resolved_hydrodynamics/force', self%force)

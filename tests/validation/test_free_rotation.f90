@@ -22,7 +22,8 @@ program test_free_rotation
   use particle_system, only: particle_system_t, particle_models_t, particle_loads_t, particle_system_create, &
                              particle_system_interact, particle_system_step, particle_loads_zero
   use immersed_boundary, only: ibm_settings_t
-  use resolved_hydrodynamics, only: resolved_hydrodynamics_t, resolved_hydrodynamics_create
+  use resolved_hydrodynamics, only: resolved_hydrodynamics_t, resolved_hydrodynamics_create, &
+                                    resolved_hydrodynamics_options_t
   use test_framework, only: test_start, test_finish, check
   implicit none
   integer, parameter :: steps = 30
@@ -105,8 +106,8 @@ contains
     settings%tolerance = 1.0e-12_wp
     settings%max_sweeps = 100
     settings%fluid_density = density
-    call resolved_hydrodynamics_create(provider, solver, system, settings, 'momentum', -1, stabilise, &
-                                       restart=.false., gravity=[0.0_wp, 0.0_wp, 0.0_wp])
+    call resolved_hydrodynamics_create(provider, solver, system, resolved_hydrodynamics_options_t(settings=settings, &
+                                       stabilise=stabilise))
     call provider%prepare(solver, system)
     loads = particle_loads_zero(1)
     dt = 0.06_wp * solver%grid%dx**2 / viscosity

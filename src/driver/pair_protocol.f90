@@ -1,33 +1,26 @@
-!> The particle-pair scenes without a grid: fluid = 'none' (vacuum) or 'stokes' (each spheroid
-!> feels the drag and torque of its analytic resistance tensors in quiescent fluid).
-!> The pair is a particle system of two bodies (module particle_system): each step is one
-!> particle_system_step under the Stokes loads of the current state (frozen over the step), which
-!> leaves the system current (closest points, collision impulses, DLVO loads), then the collision
-!> events, the output sample and the end test. The run ends at &run end_time, or at twice the
-!> first-collision time (&pair mirror_first_collision, the paper's protocol), and with
-!> &pair end_rule = 'settled' not before the outcome is settled (module pair_outcome), at most at
-!> &run end_time.
-!> Checkpoints (every &output checkpoint_interval steps and at the end) hold the particle system
-!> (group particles, module particle_system_checkpoint) and the loop's own state (group pair_scene);
-!> each is written after its step's events, sample and end test, so &run restart = .true. restores
-!> both and goes on with the next particle step, bit for bit (docs/outputs.md, Checkpoints).
-!> The pair's bookkeeping (system set-up, collision events, samples, end test, summary, checkpoint
-!> group) is public: the pair in the resolved fluid (module resolved_pair_scene) keeps it the same way.
-module pair_scene
+!> The pair protocol of the paper (section 3): a placement of two bodies (the initial condition,
+!> module pair_setup) and the pair's bookkeeping in the scene loop (module scene_loop): the
+!> collision events, the samples of particles.h5, the end rule and the outcome (module
+!> pair_outcome), the summary, and the loop's own checkpoint group (pair_scene).
+!> The run ends at &run end_time, or at twice the first-collision time (&pair
+!> mirror_first_collision, the paper's protocol), and with &pair end_rule = 'settled' not before the
+!> outcome is settled, at most at &run end_time.
+!> Checkpoints hold the particle system (group particles, module particle_system_checkpoint) and the
+!> loop's own state (group pair_scene); each is written after its step's events, sample and end
+!> test, so &run restart = .true. restores both and goes on with the next particle step, bit for bit
+!> (docs/outputs.md, Checkpoints).
+module pair_protocol
   use agglo_kinds, only: wp, i8
   use agglo_config, only: agglo_config_t
   use error_handling, only: fatal
-  use timer_registry, only: timer_register, timer_tic, timer_toc
+  use text_format, only: int_text
   use logger, only: log_line
-  use text_format, only: int_text, real_text
-  use wall_clock, only: wall_time
-  use progress_meter, only: progress_meter_t, progress_report, scientific_text
+  use progress_meter, only: scientific_text
   use run_directory, only: run_file
   use hdf5_files, only: h5_exists
   use hdf5_datasets, only: h5_read_scalar, h5_write_array, h5_read_array
-  use checkpoint_files, only: checkpoint_t, checkpoint_begin, checkpoint_commit, checkpoint_open_newest, checkpoint_close
+  use checkpoint_files, only: checkpoint_t
   use particle_system_checkpoint, only: write_particle_system_checkpoint, read_particle_system_checkpoint
-  use fluid_monitor, only: timing_report
   use pair_setup, only: pair_t, build_pair
   use rigid_body, only: integrator_code, angular_velocity_lab
   use closest_points, only: symmetry_axis_angle
@@ -35,20 +28,18 @@ module pair_scene
   use collision, only: collision_setup, collision_log_settings, approach_speed
   use lubrication, only: lubrication_setup
   use config_grid, only: smallest_spacing
-  use stokes_resistance, only: stokes_resistance_t, stokes_resistance_of, stokes_loads
   use particle_system, only: particle_models_t, particle_loads_t, particle_system_t, particle_system_create, &
-                             particle_system_interact, particle_system_step, particle_loads_zero, pair_body_image
+                             pair_body_image
   use pair_outcome, only: pair_outcome_t, pair_outcome_of, pair_outcome_rules_t, pair_outcome_rules_of
   use particle_output, only: particle_output_t, pair_run_metadata_t, particle_record_t, pair_record_t, &
-                             collision_event_t, run_summary_t, particle_output_open, particle_output_close, &
+                             collision_event_t, run_summary_t, particle_output_open, &
                              particle_output_continue, particle_output_flush, particle_output_rows, &
-                             append_particles_sample, append_collision_event, write_summary_json
+                             append_particles_sample, append_collision_event
   implicit none
   private
-  public :: run_pair_scene
-  ! Shared with the pair in the resolved fluid (module resolved_pair_scene): the pair's bookkeeping.
   public :: pair_loop_t, setup_system, record_interaction, run_finished, sampled, write_sample, finish_summary, &
-            log_pair, write_pair_scene_group, read_pair_scene_group, normal_approach_speed, open_particle_output
+            log_pair, write_pair_scene_group, read_pair_scene_group, normal_approach_speed, open_particle_output, &
+            pair_progress_detail, particle_models_of, fluid_name, bodies_progress_detail
 
   !> The pair's only pair in the system's pair list.
   integer, parameter :: the_pair = 1
@@ -62,108 +53,6 @@ module pair_scene
   end type pair_loop_t
 
 contains
-
-  subroutine run_pair_scene(cfg)
-    type(agglo_config_t), intent(in) :: cfg
-    type(pair_t) :: pair
-    type(particle_system_t) :: system
-    type(stokes_resistance_t) :: resistance
-    type(particle_loads_t) :: hydrodynamic
-    type(pair_outcome_rules_t) :: rules
-    type(particle_output_t) :: output
-    type(run_summary_t) :: summary
-    type(pair_loop_t) :: loop
-    real(wp) :: dt, wall_start
-    integer(i8) :: first_step
-    integer :: timer_step
-    logical :: stokes, finished, resumed
-
-    call build_pair(cfg%pair, cfg%run%seed, pair)
-    call setup_system(cfg, pair, system)
-    stokes = (cfg%scene%fluid == 'stokes')
-    if (stokes) resistance = stokes_resistance_of(pair%shape, cfg%fluid%density * cfg%fluid%viscosity)
-    rules = pair_outcome_rules_of(system%models)
-    call log_pair(cfg, pair, rules)
-    timer_step = timer_register('particle step')
-
-    dt = cfg%run%dt
-    loop%end_time = cfg%run%end_time
-    summary%collisions = 0
-    hydrodynamic = particle_loads_zero(system%n)
-    resumed = cfg%run%restart
-    if (resumed) then
-      call restore_pair_scene(cfg, system, loop, summary, hydrodynamic, output)
-    else
-      call open_particle_output(cfg, pair, system, output)
-      ! The collision test comes first, on the current state: with a detection distance of
-      ! v_n dt the pair is caught before a step could carry it into overlap.
-      call particle_system_interact(system, dt)
-    end if
-    first_step = loop%step
-    wall_start = wall_time()
-    finished = .false.
-    do
-      if (resumed) then
-        ! The checkpoint was written after this step's events, sample and end test: only the end
-        ! test is repeated (the deck of the continued run may set a later end).
-        resumed = .false.
-        finished = loop%step > 0 .and. run_finished(cfg, rules, system, summary, loop%time, loop%step, loop%end_time)
-        if (finished .and. .not. sampled(cfg, loop%step)) call write_sample(output, loop%time, system, hydrodynamic)
-      else
-        call record_interaction(cfg, system, loop, output, summary)
-        if (stokes) call stokes_loads_of(resistance, system, hydrodynamic)
-        ! &pair hydrodynamics_from = 'first_contact': no hydrodynamic loads before the first collision.
-        if (cfg%pair%hydrodynamics_from == 'first_contact' .and. summary%collisions == 0) &
-          hydrodynamic = particle_loads_zero(system%n)
-        if (loop%step > 0) finished = run_finished(cfg, rules, system, summary, loop%time, loop%step, loop%end_time)
-        if (sampled(cfg, loop%step) .or. finished) &
-          call write_sample(output, loop%time, system, hydrodynamic)
-        if (loop%step > first_step .and. (mod(loop%step, int(cfg%run%progress_interval, i8)) == 0 .or. finished)) &
-          call progress_line(loop%step - first_step, loop, dt, system, wall_time() - wall_start, &
-                           cfg%run%max_steps)
-        if (.not. finished .and. loop%step > first_step .and. cfg%output%checkpoint_interval > 0) then
-          if (mod(loop%step, int(cfg%output%checkpoint_interval, i8)) == 0) &
-            call checkpoint_pair_scene(cfg, system, loop, summary, hydrodynamic, output, last=.false.)
-        end if
-      end if
-      if (finished) exit
-      call timer_tic(timer_step)
-      call particle_system_step(system, dt, hydrodynamic)   ! zero at fluid = 'none'
-      call timer_toc(timer_step)
-      loop%time = loop%time + dt
-      loop%step = loop%step + 1
-    end do
-    ! The last state is always kept (checkpoint_interval = 0: only there; the loop writes none at the
-    ! end), so a finished run can be continued with a later &run end_time.
-    if (loop%step > first_step) call checkpoint_pair_scene(cfg, system, loop, summary, hydrodynamic, output, last=.true.)
-    call particle_output_close(output)
-
-    call finish_summary(cfg, rules, system, loop, summary)
-    summary%wall_time = wall_time() - wall_start
-    call write_summary_json(run_file('summary.json'), summary)
-    call timing_report(loop%step - first_step, wall_time() - wall_start)
-    call log_line('pair scene: outcome '//trim(summary%outcome)//'; particles.h5 and summary.json written')
-    if (loop%step >= cfg%run%max_steps .and. loop%time < loop%end_time * (1.0_wp - 1.0e-12_wp)) &
-      call log_line('pair scene: stopped by &run max_steps = '//int_text(cfg%run%max_steps)//' at t = '// &
-                    real_text(loop%time)//' s, before the end time '//real_text(loop%end_time)//' s')
-  end subroutine run_pair_scene
-
-  !> One checkpoint transaction: the particle system's group and the scene's own (group pair_scene:
-  !> time, step, the largest vdW force, the collision count and first collision, the Stokes loads the
-  !> next step is taken under, and the rows of particles.h5, flushed to disk first).
-  subroutine checkpoint_pair_scene(cfg, system, loop, summary, hydrodynamic, output, last)
-    type(agglo_config_t), intent(in) :: cfg
-    type(particle_system_t), intent(in) :: system
-    type(pair_loop_t), intent(in) :: loop
-    type(run_summary_t), intent(in) :: summary
-    type(particle_loads_t), intent(in) :: hydrodynamic
-    type(particle_output_t), intent(inout) :: output
-    logical, intent(in) :: last          !< the finished run's last state
-    type(checkpoint_t) :: transaction
-    call checkpoint_begin(transaction, loop%step)
-    call write_pair_scene_group(transaction, cfg, system, loop, summary, hydrodynamic, output, last)
-    call checkpoint_commit(transaction, cfg%output%checkpoints_kept)
-  end subroutine checkpoint_pair_scene
 
   !> The particle system's group and the scene's own (group pair_scene) of an open checkpoint.
   subroutine write_pair_scene_group(transaction, cfg, system, loop, summary, hydrodynamic, output, last)
@@ -196,21 +85,6 @@ contains
       call h5_write_array(file, 'pair_scene/output_rows', rows)
     end associate
   end subroutine write_pair_scene_group
-
-  !> &run restart: the newest valid checkpoint restores the particle system and the scene's loop
-  !> (the system is current: no new interaction), and particles.h5 continues from its rows.
-  subroutine restore_pair_scene(cfg, system, loop, summary, hydrodynamic, output)
-    type(agglo_config_t), intent(in) :: cfg
-    type(particle_system_t), intent(inout) :: system
-    type(pair_loop_t), intent(inout) :: loop
-    type(run_summary_t), intent(inout) :: summary
-    type(particle_loads_t), intent(inout) :: hydrodynamic
-    type(particle_output_t), intent(out) :: output
-    type(checkpoint_t) :: restart
-    call checkpoint_open_newest(restart)
-    call read_pair_scene_group(restart, cfg, system, loop, summary, hydrodynamic, output)
-    call checkpoint_close(restart)
-  end subroutine restore_pair_scene
 
   !> From an open checkpoint: the particle system, the scene's loop, and particles.h5 continued
   !> from the checkpoint's rows.
@@ -252,7 +126,7 @@ contains
     hydrodynamic%torque = torque
     ! The paper's end (twice the first-collision time) as record_interaction set it, under this deck.
     loop%end_time = cfg%run%end_time
-    if (summary%has_first_collision .and. cfg%pair%mirror_first_collision) &
+    if (summary%has_first_collision .and. mirrored(cfg)) &
       loop%end_time = min(loop%end_time, 2.0_wp * summary%first_collision%time)
     call log_line('pair scene: continuing from '//restart%path)
     call particle_output_continue(output, run_file('particles.h5'), system%n, rows(1), rows(2))
@@ -286,13 +160,21 @@ contains
   end function sampled
 
   !> The two bodies of the placed pair, their models, no box (the pair scenes are unbounded; the
-  !> resolved pair scene passes the fluid's periodic box), and
+  !> scene loop passes the resolved fluid's periodic box), and
   !> the placement's closest points as the current contact.
   subroutine setup_system(cfg, pair, system, box_length)
     type(agglo_config_t), intent(in) :: cfg
     type(pair_t), intent(in) :: pair
     type(particle_system_t), intent(out) :: system
     real(wp), intent(in), optional :: box_length(3)   !< m, periodic box (the resolved fluid's); absent: unbounded
+    call particle_system_create(system, [pair%shape, pair%shape], pair%body, particle_models_of(cfg), &
+                                box_length=box_length, contacts=[pair%contact])
+  end subroutine setup_system
+
+  !> The particle models of the deck (&scene dlvo, collisions; &dlvo, &collision; &pair integrator,
+  !> and radius for the DLVO curvature factor), their constants logged.
+  function particle_models_of(cfg) result(models)
+    type(agglo_config_t), intent(in) :: cfg
     type(particle_models_t) :: models
     models%dlvo = cfg%scene%dlvo
     models%collisions = cfg%scene%collisions
@@ -308,23 +190,10 @@ contains
     models%lubrication = cfg%collision%lubrication
     if (models%lubrication) call lubrication_setup(models%lubrication_model, cfg%collision, &
                                                    cfg%fluid%density * cfg%fluid%viscosity, smallest_spacing(cfg%grid))
-    call particle_system_create(system, [pair%shape, pair%shape], pair%body, models, box_length=box_length, &
-                                contacts=[pair%contact])
-  end subroutine setup_system
+  end function particle_models_of
 
-  !> Stokes drag and torque of each body at its current velocities (lab frame).
-  subroutine stokes_loads_of(resistance, system, loads)
-    type(stokes_resistance_t), intent(in) :: resistance
-    type(particle_system_t), intent(in) :: system
-    type(particle_loads_t), intent(inout) :: loads
-    integer :: i
-    do i = 1, system%n
-      call stokes_loads(resistance, system%bodies(i), loads%force(:, i), loads%torque(:, i))
-    end do
-  end subroutine stokes_loads_of
-
-  !> After an interaction: the collision events (the first one may set the paper's end time) and the
-  !> largest vdW force so far.
+  !> After an interaction: the collision events of every pair (the pair protocol's first one may set
+  !> the paper's end time) and the largest vdW force so far.
   subroutine record_interaction(cfg, system, loop, output, summary)
     type(agglo_config_t), intent(in) :: cfg
     type(particle_system_t), intent(in) :: system
@@ -332,26 +201,35 @@ contains
     type(particle_output_t), intent(inout) :: output
     type(run_summary_t), intent(inout) :: summary
     type(collision_event_t) :: event
-    associate (pair => system%pairs(the_pair), time => loop%time, end_time => loop%end_time, &
-               max_vdw_force => loop%max_vdw_force)
-      if (pair%collided) then
-        event = collision_event_t(time=time, theta1=pair%contact%theta1, phi1=pair%contact%phi1, &
-            theta2=pair%contact%theta2, phi2=pair%contact%phi2, &
-            normal_velocity_before=pair%collision%normal_velocity_before, &
-            normal_velocity_after=pair%collision%normal_velocity_after, &
-            psi=symmetry_axis_angle(system%bodies(1)%quaternion, system%bodies(2)%quaternion), &
-            first=pair%first, second=pair%second)
-        call append_collision_event(output, event)
-        summary%collisions = summary%collisions + 1
-        if (summary%collisions == 1) then
-          summary%has_first_collision = .true.
-          summary%first_collision = event
-          if (cfg%pair%mirror_first_collision) end_time = min(end_time, 2.0_wp * time)
+    integer :: p
+    do p = 1, size(system%pairs)
+      associate (pair => system%pairs(p), time => loop%time, end_time => loop%end_time, &
+                 max_vdw_force => loop%max_vdw_force)
+        if (pair%collided) then
+          event = collision_event_t(time=time, theta1=pair%contact%theta1, phi1=pair%contact%phi1, &
+              theta2=pair%contact%theta2, phi2=pair%contact%phi2, &
+              normal_velocity_before=pair%collision%normal_velocity_before, &
+              normal_velocity_after=pair%collision%normal_velocity_after, &
+              psi=symmetry_axis_angle(system%bodies(pair%first)%quaternion, system%bodies(pair%second)%quaternion), &
+              first=pair%first, second=pair%second)
+          call append_collision_event(output, event)
+          summary%collisions = summary%collisions + 1
+          if (summary%collisions == 1) then
+            summary%has_first_collision = .true.
+            summary%first_collision = event
+            if (mirrored(cfg)) end_time = min(end_time, 2.0_wp * time)
+          end if
         end if
-      end if
-      max_vdw_force = max(max_vdw_force, abs(pair%dlvo%vdw_force))
-    end associate
+        max_vdw_force = max(max_vdw_force, abs(pair%dlvo%vdw_force))
+      end associate
+    end do
   end subroutine record_interaction
+
+  !> The paper's end at twice the first-collision time: the pair protocol's (&pair mirror_first_collision).
+  logical function mirrored(cfg)
+    type(agglo_config_t), intent(in) :: cfg
+    mirrored = cfg%scene%particles == 'pair' .and. cfg%pair%mirror_first_collision
+  end function mirrored
 
   !> The end test after a step: the paper's end time (end_time: &run end_time, or twice the first
   !> collision) or &run max_steps; with end_rule = 'settled', past the paper's end time only once the
@@ -418,21 +296,28 @@ contains
     end associate
   end function normal_approach_speed
 
-  !> The progress line (core progress_meter) with the pair's gap and normal approach speed;
-  !> steps_taken: steps of this run segment (since the start or the restart), for the speed;
-  !> max_steps: &run max_steps, for the ETA when the run stops there before its end time.
-  subroutine progress_line(steps_taken, loop, dt, system, elapsed, max_steps)
-    integer(i8), intent(in) :: steps_taken
-    type(pair_loop_t), intent(in) :: loop
-    real(wp), intent(in) :: dt, elapsed
+  !> Free bodies: the smallest gap over the pairs and the collisions so far, for the progress log.
+  function bodies_progress_detail(system, collisions) result(text)
     type(particle_system_t), intent(in) :: system
-    integer, intent(in) :: max_steps
-    type(progress_meter_t), save :: meter
-    call log_line(progress_report(meter, wall_time(), loop%step, loop%time, dt, elapsed / real(steps_taken, wp), &
-                                  loop%end_time - loop%time, steps_left=real(max_steps - loop%step, wp), &
-                                  detail='  gap = '//scientific_text(system%pairs(the_pair)%contact%gap)//' m  v_n = '// &
-                                  scientific_text(normal_approach_speed(system, the_pair))//' m/s'))
-  end subroutine progress_line
+    integer, intent(in) :: collisions
+    character(len=:), allocatable :: text
+    integer :: p, closest
+    closest = 1
+    do p = 2, size(system%pairs)
+      if (system%pairs(p)%contact%gap < system%pairs(closest)%contact%gap) closest = p
+    end do
+    text = '  bodies: smallest gap = '//scientific_text(system%pairs(closest)%contact%gap)//' m (bodies '// &
+           int_text(system%pairs(closest)%first)//', '//int_text(system%pairs(closest)%second)//')  v_n = '// &
+           scientific_text(normal_approach_speed(system, closest))//' m/s  collisions = '//int_text(collisions)
+  end function bodies_progress_detail
+
+  !> The pair's gap and normal approach speed for the progress log.
+  function pair_progress_detail(system) result(text)
+    type(particle_system_t), intent(in) :: system
+    character(len=:), allocatable :: text
+    text = '  gap = '//scientific_text(system%pairs(the_pair)%contact%gap)//' m  v_n = '// &
+           scientific_text(normal_approach_speed(system, the_pair))//' m/s'
+  end function pair_progress_detail
 
   !> The summary of the finished run; the outcome and whether it was settled (module pair_outcome,
   !> docs/theory.md "Run outcome").
@@ -479,4 +364,4 @@ contains
     call log_line(trim(line))
   end subroutine log_pair
 
-end module pair_scene
+end module pair_protocol
