@@ -14,12 +14,13 @@
 !> sum (load_method = 'surface', computed and logged with either method).
 module config_bodies
   use agglo_kinds, only: wp
+  use file_system, only: longest_path
   use deck_file, only: deck_t, check_namelist_read, require_option, require_positive, require_nonnegative, &
                        require_range, int_text, real_text, text_file_load
   use error_handling, only: input_error
   implicit none
   private
-  public :: bodies_config_t, read_bodies_group, check_bodies_group, write_bodies_group, max_bodies
+  public :: bodies_config_t, read_bodies_group, read_body_file, check_bodies_group, write_bodies_group, max_bodies
 
   integer, parameter :: max_bodies = 16
   !> Finest icosphere: icosphere_mesh's max_icosphere_level (config/ does not use particles/; a unit
@@ -28,8 +29,11 @@ module config_bodies
 
   type :: bodies_config_t
     integer :: count = 0                                      !< bodies in the box (deck: 1..max_bodies)
-    character(len=256) :: file = ''                           !< the body file (CSV), instead of count and the arrays
-    ! Per body, count of each after reading (the defaults: set_defaults):
+    character(len=longest_path + 1) :: file = ''              !< the body file (CSV), instead of count and the arrays
+    !> The arrays hold the bodies of file (read_body_file), not the deck's: the deck written back
+    !> (run.nml) names the file and leaves them out.
+    logical :: from_file = .false.
+    ! Per body (the bodies are the first count elements: max_bodies of them from a deck, count from a body file):
     character(len=16), allocatable :: shape(:)                !< 'sphere' | 'needle' | 'disk' | 'spheroid'
     real(wp), allocatable :: radius(:)                        !< m, volume-equivalent radius
     real(wp), allocatable :: aspect_ratio(:)                  !< needle/disk: long/short (>= 1); spheroid: a/b
@@ -54,7 +58,7 @@ module config_bodies
   integer :: count, max_sweeps, mesh_level
   logical :: compare_loads
   character(len=16) :: shape(max_bodies), load_method, geometry
-  character(len=256) :: file
+  character(len=longest_path + 1) :: file
   real(wp) :: radius(max_bodies), aspect_ratio(max_bodies), centre(3, max_bodies), axis(3, max_bodies), &
               velocity(3, max_bodies), angular_velocity(3, max_bodies), oscillation_amplitude(3, max_bodies), &
               oscillation_frequency(max_bodies), ghost_tolerance, driving_force(3)
@@ -77,9 +81,9 @@ contains
     count = cfg%count
     file = cfg%file
     ! The bodies of a file stay in the file (count 0 in the deck).
-    if (len_trim(cfg%file) > 0) count = 0
+    if (cfg%from_file) count = 0
     n = 0
-    if (allocated(cfg%shape) .and. len_trim(cfg%file) == 0) n = min(size(cfg%shape), max_bodies)
+    if (allocated(cfg%shape) .and. .not. cfg%from_file) n = min(size(cfg%shape), max_bodies)
     shape(1:n) = cfg%shape(1:n); radius(1:n) = cfg%radius(1:n); aspect_ratio(1:n) = cfg%aspect_ratio(1:n)
     centre(:, 1:n) = cfg%centre(:, 1:n); axis(:, 1:n) = cfg%axis(:, 1:n); velocity(:, 1:n) = cfg%velocity(:, 1:n)
     angular_velocity(:, 1:n) = cfg%angular_velocity(:, 1:n)
@@ -90,24 +94,23 @@ contains
     compare_loads = cfg%compare_loads
   end subroutine to_namelist
 
-  !> The deck's bodies (the first count, at most max_bodies, of the arrays) and settings.
+  !> The deck's bodies and settings. The arrays keep all max_bodies elements the deck may give (the
+  !> bodies are the first count of them), so the deck written back (run.nml) holds what was read.
   subroutine from_namelist(cfg)
     type(bodies_config_t), intent(inout) :: cfg
-    integer :: n
     cfg%count = count
     cfg%file = file
-    n = max(0, min(count, max_bodies))   ! a count out of range is refused by check_bodies_group
-    cfg%shape = shape(1:n); cfg%radius = radius(1:n); cfg%aspect_ratio = aspect_ratio(1:n)
-    cfg%centre = centre(:, 1:n); cfg%axis = axis(:, 1:n); cfg%velocity = velocity(:, 1:n)
-    cfg%angular_velocity = angular_velocity(:, 1:n)
-    cfg%oscillation_amplitude = oscillation_amplitude(:, 1:n); cfg%oscillation_frequency = oscillation_frequency(1:n)
+    cfg%shape = shape; cfg%radius = radius; cfg%aspect_ratio = aspect_ratio
+    cfg%centre = centre; cfg%axis = axis; cfg%velocity = velocity
+    cfg%angular_velocity = angular_velocity
+    cfg%oscillation_amplitude = oscillation_amplitude; cfg%oscillation_frequency = oscillation_frequency
     cfg%ghost_tolerance = ghost_tolerance; cfg%max_sweeps = max_sweeps; cfg%load_method = load_method
     cfg%driving_force = driving_force; cfg%geometry = geometry; cfg%mesh_level = mesh_level
     cfg%compare_loads = compare_loads
   end subroutine from_namelist
 
-  !> The group, and with &bodies file the bodies of the file (collective: rank 0 reads the file,
-  !> every rank parses the same lines and stops on the same error).
+  !> The group as the deck gives it; the bodies of &bodies file are read by read_body_file once the
+  !> scene is known to use them (config_reader), so reading a deck never opens a file it names.
   subroutine read_bodies_group(deck, cfg)
     type(deck_t), intent(in) :: deck
     type(bodies_config_t), intent(out) :: cfg
@@ -117,7 +120,6 @@ contains
     read(deck%lines, nml=bodies, iostat=ios, iomsg=message)
     call check_namelist_read(deck, 'bodies', ios, message)
     call from_namelist(cfg)
-    if (len_trim(cfg%file) > 0) call read_body_file(cfg)
   end subroutine read_bodies_group
 
   !> The bodies of &bodies file, a CSV text file with one body per line:
@@ -127,6 +129,7 @@ contains
   !> velocity in rad/s, lab frame, 0 when left out). Blank lines and lines starting with '#' are
   !> skipped. No oscillation: a body of the file moves with constant velocities (prescribed) or
   !> under its loads (free). The values are checked with the deck's own (check_bodies_group).
+  !> Collective: rank 0 reads the file, every rank parses the same lines and stops on the same error.
   subroutine read_body_file(cfg)
     type(bodies_config_t), intent(inout) :: cfg
     character(len=:), allocatable :: lines(:)
@@ -145,6 +148,7 @@ contains
     if (n == 0) call input_error('bodies', 'file', name//' (no body in it)', &
         'a CSV file with one body per line; docs/decks.md, &bodies')
     cfg%count = n
+    cfg%from_file = .true.
     deallocate(cfg%shape, cfg%radius, cfg%aspect_ratio, cfg%centre, cfg%axis, cfg%velocity, cfg%angular_velocity, &
                cfg%oscillation_amplitude, cfg%oscillation_frequency)
     allocate(cfg%shape(n), cfg%radius(n), cfg%aspect_ratio(n), cfg%centre(3, n), cfg%axis(3, n), cfg%velocity(3, n), &

@@ -21,7 +21,8 @@ contains
     if (cfg%scene%forcing /= 'none') call check_forcing_cross(cfg)
     if (cfg%scene%particles == 'pair') call check_particle_cross(cfg)
     if (cfg%scene%particles == 'pair' .and. cfg%scene%fluid == 'resolved') call check_pair_in_box(cfg)
-    if (cfg%scene%particles == 'prescribed' .and. cfg%scene%fluid == 'resolved') call check_bodies_in_box(cfg)
+    if ((cfg%scene%particles == 'prescribed' .or. cfg%scene%particles == 'free') .and. cfg%scene%fluid == 'resolved') &
+      call check_bodies_in_box(cfg)
   end subroutine check_cross_groups
 
   !> A position given in a deck must lie in the periodic box of &grid, 0 <= x_d <= L_d: one outside
@@ -44,12 +45,18 @@ contains
     end do
   end subroutine require_in_box
 
-  !> Bodies in prescribed motion: each centre at t = 0 in the box (they may leave it later, moving).
+  !> Prescribed or free bodies: each centre at t = 0 in the box (they may leave it later, moving),
+  !> whether the deck's arrays or the body file (named with the body's place among its bodies) gave it.
   subroutine check_bodies_in_box(cfg)
     type(agglo_config_t), intent(in) :: cfg
     integer :: n
     do n = 1, cfg%bodies%count
-      call require_in_box('bodies', 'centre(:, '//int_text(n)//')', cfg%bodies%centre(:, n), cfg)
+      if (len_trim(cfg%bodies%file) > 0) then
+        call require_in_box('bodies', 'file "'//trim(cfg%bodies%file)//'", body '//int_text(n)//' (its centre)', &
+                            cfg%bodies%centre(:, n), cfg)
+      else
+        call require_in_box('bodies', 'centre(:, '//int_text(n)//')', cfg%bodies%centre(:, n), cfg)
+      end if
     end do
   end subroutine check_bodies_in_box
 

@@ -15,7 +15,7 @@ module config_reader
   use config_pair, only: read_pair_group, check_pair_group
   use config_dlvo, only: read_dlvo_group, check_dlvo_group
   use config_collision, only: read_collision_group, check_collision_group, default_lubrication_handover
-  use config_bodies, only: read_bodies_group, check_bodies_group
+  use config_bodies, only: read_bodies_group, read_body_file, check_bodies_group
   implicit none
   private
   public :: read_config, parse_config, read_groups, apply_override
@@ -70,7 +70,10 @@ contains
     ! The lubrication hand-over gap is counted in &grid cells in every scene.
     if (cfg%scene%fluid == 'resolved' .or. cfg%collision%lubrication) call check_grid_group(cfg%grid)
     if (cfg%scene%forcing /= 'none') call check_forcing_group(cfg%forcing)
-    if (cfg%scene%particles == 'prescribed' .or. cfg%scene%particles == 'free') call check_bodies_group(cfg%bodies)
+    if (cfg%scene%particles == 'prescribed' .or. cfg%scene%particles == 'free') then
+      if (len_trim(cfg%bodies%file) > 0) call read_body_file(cfg%bodies)
+      call check_bodies_group(cfg%bodies)
+    end if
     ! Free bodies take their material, integrator and DLVO radius from &pair (docs/decks.md, &bodies).
     if (cfg%scene%particles == 'pair' .or. cfg%scene%particles == 'free') then
       call check_pair_group(cfg%pair)

@@ -4,12 +4,13 @@
 #  - a step count to end_time beyond max(&run max_steps, 1e9) (dt = 1e-300 s ran until max_steps,
 #    10^9 steps); the limit itself, and a smaller max_steps set on purpose, are accepted, and a
 #    pair scene stopped by max_steps before its end time says so in its log;
-#  - a pair centre or a body centre outside the periodic box (it was wrapped); a pair centre of a
-#    scene without a box is not bounded;
+#  - a pair centre or a body centre outside the periodic box (it was wrapped), a body of a body
+#    file too (free bodies); a pair centre of a scene without a box is not bounded; a body file the
+#    scene does not use is not opened;
 #  - a field file that does not say its box size: refused with the command that adds it, and that
 #    command makes the file usable (the run starts from the file's own field).
 # Refusals: non-zero exit and the message naming the group, the variable, the value and the range.
-# checks: 18
+# checks: 20
 set -u
 AGGLO=${AGGLO:?AGGLO must point to the built executable}
 here=$(cd "$(dirname "$0")" && pwd)
@@ -86,6 +87,20 @@ expect_error body_centre_beyond_box "&run name = 'b', dt = 1.0e-6, end_time = 1.
 &bodies count = 2, radius(1) = 1.6e-4, radius(2) = 1.6e-4, centre(:,1) = 0.3e-3, 0.3e-3, 0.3e-3,
   centre(:,2) = 0.7e-3, 0.7e-3, 1.2e-3 /" '&bodies centre(:, 2) = 7.00000E-04, 7.00000E-04, 1.20000E-03 is not allowed' \
   '0 <= z <= length_z = 1.00000E-03 m' 'z = 1.20000E-03 m is outside'
+# Free bodies from a body file (shape, radius, aspect_ratio, centre, axis, velocity): the second
+# body's x beyond the box.
+printf 'sphere, 1.6e-4, 1.0, 0.3e-3, 0.3e-3, 0.3e-3, 0, 0, 0, 0, 0, 0\nsphere, 1.6e-4, 1.0, 1.3e-3, 0.7e-3, 0.7e-3, 0, 0, 0, 0, 0, 0\n' \
+  > outside.csv
+free_bodies="&run name = 'b', dt = 1.0e-6, end_time = 1.0e-5 /
+&scene fluid = 'resolved', particles = 'free', particle_coupling = 'resolved' /
+&grid nx = 16, ny = 16, nz = 16 /"
+expect_error file_body_centre_beyond_box "$free_bodies
+&bodies file = 'outside.csv' /" '&bodies file "outside.csv", body 2 (its centre) = 1.30000E-03, 7.00000E-04, 7.00000E-04 is not allowed' \
+  'x = 1.30000E-03 m is outside'
+# A body file named in a scene without bodies is neither read nor checked (it need not exist).
+accepted unused_body_file_not_opened "$fluid
+&run name = 'f', dt = 1.0e-6, end_time = 1.0e-5 /
+&bodies file = 'no-such-file.csv' /"
 
 # --- A field file that does not say its box size ------------------------------------------------
 # A field written by the code in a box of 0.7 mm, its box dataset then deleted (as in a file of an
