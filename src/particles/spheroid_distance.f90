@@ -87,11 +87,16 @@ contains
   !> Eberly 2013). By the convexity, after at most one step from the right the iterates rise
   !> monotonically to the root; the iteration stops when a step no longer changes sigma or the
   !> bracket has no interior float, i.e. at the root to the last bits, as the bisection alone (about
-  !> 5 evaluations near the surface, where the ghost nodes are, against 50-70 bisection steps).
+  !> 5 evaluations near the surface, where the ghost nodes are, against 50-70 bisection steps). For a
+  !> circle (r0 = 1: a sphere) the root is closed-form, sigma = |(n0, z1)|.
   pure function shifted_root(r0m1, n0, z1, g) result(sigma)
     real(wp), intent(in) :: r0m1, n0, z1, g
     real(wp) :: sigma, lo, hi, value, slope, next
     integer :: iteration
+    if (r0m1 == 0.0_wp) then   ! a circle (a sphere's meridian): G = |(n0, z1)|^2/sigma^2 - 1
+      sigma = hypot(n0, z1)
+      return
+    end if
     lo = z1
     if (g < 0.0_wp) then
       hi = 1.0_wp
