@@ -64,7 +64,8 @@ fi
 # Immersed bodies in prescribed motion (the paper's needle and disk, moving and rotating: reclassified
 # every step; explicit diffusion): the coupled step against the fluid-only step (target <= 1.3x,
 # docs/studies/performance.md), by part, for both couplings, 1 and 2 ranks; then against the number of
-# bodies and against the mesh level of the ghost-node geometry. Medians over 10 (128^3) or 20 (64^3) repetitions, slowest rank; on 1 rank the process's
+# bodies (needles and disks at 128^3; spheres of D/dx = 10 at 64^3) and against the mesh level of the
+# ghost-node geometry. Medians over 10 (128^3) or 20 (64^3) repetitions, slowest rank; on 1 rank the process's
 # CPU time (robust on a shared machine), on 2 ranks the wall time.
 if [[ $parts == *immersed* ]]; then
   echo
@@ -77,6 +78,10 @@ if [[ $parts == *immersed* ]]; then
     (cd "$work" && mpirun -np 1 "$immersed_exe" 128 10 $bodies implicit cpu)
   done
   (cd "$work" && mpirun -np 1 "$immersed_exe" 64 20 2 implicit cpu)
+  for bodies in 1 4 16; do   # spheres of D/dx = 10 on a lattice at 64^3 (the cost per body)
+    (cd "$work" && mpirun -np 1 "$immersed_exe" 64 20 $bodies implicit cpu -1 sphere)
+    (cd "$work" && mpirun -np 2 "$immersed_exe" 64 20 $bodies implicit wall -1 sphere)
+  done
   for level in 1 2 3; do   # the ghost nodes on the icosphere (&bodies geometry = 'mesh')
     (cd "$work" && mpirun -np 1 "$immersed_exe" 128 10 2 implicit cpu $level)
   done

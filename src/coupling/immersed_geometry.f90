@@ -28,6 +28,26 @@
 !>   they may include ghost nodes, interior nodes and G itself, whose weight the implicit ghost
 !>   row moves to the diagonal: (1 + kappa w_G) u_G = (1 + kappa) u_B - kappa sum_{c /= G} w_c u_c.
 !>
+!> Work per body (options%band): the exact tests run only where a cheap one cannot decide, so the
+!> classification gives the nodes and records of the full one (every node of each body's bounding
+!> box tested exactly, every other body tried for the fallback) with work in proportion to the
+!> body's nodes rather than to the grid:
+!> - solid test: along each row of nodes (fixed j, k) the implicit function of the rotated body is a
+!>   quadratic q(s) = A11 s^2 + 2 b s + c in the x separation s (x^T A x - 1, A = R diag(a^-2, b^-2,
+!>   b^-2) R^T). A row whose minimum exceeds the margin is skipped; a node with |q| above the margin
+!>   takes the sign of q; only the nodes within the margin take the exact test on the rotated point.
+!>   The margin, 1e-9 (max(a, b)/min(a, b))^2, exceeds the round-off of either evaluation (at most
+!>   some tens of ulps of the terms, each below 9 (max/min)^2 in the bounding box) by orders of
+!>   magnitude, so both give the same sign wherever the cheap one is trusted;
+!> - the ghost and interior lists are gathered plane by plane and row by row over the bounding boxes
+!>   of the bodies that reach the row (in storage order, as a sweep of the whole slab would);
+!> - the fallback test of a ghost tries only the bodies whose bounding sphere lies within reach of
+!>   its own: |c_m - c_n| <= R_n + R_m + (1 + max(1, image_cells)) h_max (R = max(a, b)); any other
+!>   body is rejected by the segment test's own bounding-sphere check, since |B - c_n| <= R_n and
+!>   the segment is at most max(1, image_cells) h_max long;
+!> - the closest point is the Newton iteration of spheroid_distance (about 5 evaluations for a ghost
+!>   node within a cell of the surface).
+!>
 !> The classification is local: each rank classifies its own z planes and as many planes beyond
 !> them as the stencils reach (the geometry is analytic, so no communication is needed). Stencil
 !> nodes are stored by global index, wrapped periodically; the ones outside this rank's planes
@@ -66,6 +86,9 @@ module immersed_geometry
     real(wp) :: image_distance_cells = 1.5_wp    !< cells (of the largest spacing), for 'image'
     !> cells (of the largest spacing): a fallback row whose gap s is below this takes the saturated Couette value
     real(wp) :: saturation_gap_cells = 0.5_wp
+    !> .true.: the exact tests only where they can decide (see "Work per body" above); .false.: every
+    !> node of each body's bounding box and every other body (the reference: the same nodes and records)
+    logical :: band = .true.
   end type immersed_options_t
 
   !> A ghost node of one velocity component, with everything its ghost row needs.
@@ -237,7 +260,11 @@ contains
     type(component_nodes_t), intent(inout) :: nodes
     integer, allocatable :: list_x(:), list_y(:), list_z(:), box_x(:), box_y(:)
     logical, allocatable :: near_x(:), near_y(:), near_z(:)
-    integer :: reach, k_lo, k_hi, i, j, k, ii, jj, kk, n_ghost, n_interior, g, n
+    integer :: reach, k_lo, k_hi, i, j, k, ii, jj, kk, n_ghost, n_interior, g, n, m, n_plane, n_row
+    integer :: box_size_x(size(bodies)), box_list_x(grid%nx, size(bodies))
+    integer :: plane_bodies(size(bodies)), row_bodies(size(bodies)), i_below(grid%nx), i_above(grid%nx)
+    integer :: j_below(grid%ny), j_above(grid%ny)
+    integer, allocatable :: candidates(:, :), n_candidates(:)
     real(wp) :: h_max, h_min, image_cells
 
     ! Planes beyond the slab that the stencils can reach: d_G <= h_max (a fluid neighbour lies one
@@ -247,6 +274,10 @@ contains
     image_cells = 1.0_wp
     if (trim(options%image_point) == 'image') image_cells = max(1.0_wp, options%image_distance_cells)
     reach = ceiling((1.0_wp + image_cells) * h_max / h_min) + 1
+    i_below = [(wrap(i - 1, grid%nx), i = 1, grid%nx)]
+    i_above = [(wrap(i + 1, grid%nx), i = 1, grid%nx)]
+    j_below = [(wrap(j - 1, grid%ny), j = 1, grid%ny)]
+    j_above = [(wrap(j + 1, grid%ny), j = 1, grid%ny)]
     k_lo = 1 - reach
     k_hi = grid%nz_local + reach
 
@@ -254,7 +285,7 @@ contains
     ! near_* mark the indices within some body's bounding box: only there can a node be solid.
     call prepare_work(work, grid, size(bodies), k_lo - 1, k_hi + 1)
     allocate(near_x(grid%nx), near_y(grid%ny), near_z(k_lo - 1:k_hi + 1))
-    call mark_solid_nodes(grid, bodies, component, work, near_x, near_y, near_z)
+    call mark_solid_nodes(grid, bodies, options, component, work, near_x, near_y, near_z)
 
     ! The indices within some box, ascending (the loops below keep the storage order).
     list_x = pack([(i, i = 1, grid%nx)], near_x)
@@ -268,6 +299,8 @@ contains
       do n = 1, size(bodies)
         box_x = pack([(i, i = 1, grid%nx)], work%marked_x(:, n))
         box_y = pack([(j, j = 1, grid%ny)], work%marked_y(:, n))
+        box_size_x(n) = size(box_x)
+        box_list_x(1:size(box_x), n) = box_x
         do k = k_lo, k_hi
           if (.not. work%marked_z(k, n)) cycle
           do jj = 1, size(box_y)
@@ -275,8 +308,8 @@ contains
             do ii = 1, size(box_x)
               i = box_x(ii)
               if (owner(i, j, k) /= n) cycle
-              if (owner(wrap(i - 1, grid%nx), j, k) == 0 .or. owner(wrap(i + 1, grid%nx), j, k) == 0 .or. &
-                  owner(i, wrap(j - 1, grid%ny), k) == 0 .or. owner(i, wrap(j + 1, grid%ny), k) == 0 .or. &
+              if (owner(i_below(i), j, k) == 0 .or. owner(i_above(i), j, k) == 0 .or. &
+                  owner(i, j_below(j), k) == 0 .or. owner(i, j_above(j), k) == 0 .or. &
                   owner(i, j, k - 1) == 0 .or. owner(i, j, k + 1) == 0) then
                 status(i, j, k) = node_ghost
                 if (k >= 1 .and. k <= grid%nz_local) n_ghost = n_ghost + 1
@@ -303,25 +336,49 @@ contains
       if (.not. allocated(nodes%interior)) allocate(nodes%interior(3, n_interior), nodes%interior_body(n_interior))
       nodes%n_ghost = 0
       nodes%n_interior = 0
-      do kk = 1, size(list_z)
-        k = list_z(kk)
-        if (k < 1 .or. k > grid%nz_local) cycle
-        do jj = 1, size(list_y)
-          j = list_y(jj)
-          do ii = 1, size(list_x)
-            i = list_x(ii)
-            select case (status(i, j, k))
-            case (node_ghost)
-              nodes%n_ghost = nodes%n_ghost + 1
-              nodes%ghost(nodes%n_ghost) = ghost_node_t(node=[i, j, k], body=owner(i, j, k))
-            case (node_interior)
-              nodes%n_interior = nodes%n_interior + 1
-              nodes%interior(:, nodes%n_interior) = [i, j, k]
-              nodes%interior_body(nodes%n_interior) = owner(i, j, k)
-            end select
+      if (options%band) then
+        ! Plane by plane, row by row: only the rows some body's box reaches, and in a row the
+        ! indices of those boxes (ascending: the order of the sweep below).
+        do k = 1, grid%nz_local
+          if (.not. near_z(k)) cycle
+          n_plane = 0
+          do n = 1, size(bodies)
+            if (.not. work%marked_z(k, n)) cycle
+            n_plane = n_plane + 1
+            plane_bodies(n_plane) = n
+          end do
+          do j = 1, grid%ny
+            if (.not. near_y(j)) cycle
+            n_row = 0
+            do m = 1, n_plane
+              if (.not. work%marked_y(j, plane_bodies(m))) cycle
+              n_row = n_row + 1
+              row_bodies(n_row) = plane_bodies(m)
+            end do
+            if (n_row == 1) then
+              n = row_bodies(1)
+              do ii = 1, box_size_x(n)
+                call list_node(box_list_x(ii, n), j, k)
+              end do
+            else if (n_row > 1) then
+              do i = 1, grid%nx
+                if (any(work%marked_x(i, row_bodies(1:n_row)))) call list_node(i, j, k)
+              end do
+            end if
           end do
         end do
-      end do
+      else
+        ! Every node of the union of the boxes' index sets (the reference).
+        do kk = 1, size(list_z)
+          k = list_z(kk)
+          if (k < 1 .or. k > grid%nz_local) cycle
+          do jj = 1, size(list_y)
+            do ii = 1, size(list_x)
+              call list_node(list_x(ii), list_y(jj), k)
+            end do
+          end do
+        end do
+      end if
       call fill_field_status(grid, status, k_lo, nodes)
 
       nodes%n_fallback = 0
@@ -332,8 +389,11 @@ contains
       do g = 1, nodes%n_ghost
         work%ghost_index(nodes%ghost(g)%node(1), nodes%ghost(g)%node(2), nodes%ghost(g)%node(3)) = g
       end do
+      call fallback_candidates(grid, bodies, options, candidates, n_candidates)
       do g = 1, nodes%n_ghost
-        call build_ghost_record(grid, bodies, options, component, status, k_lo, work%ghost_index, nodes%ghost(g))
+        n = nodes%ghost(g)%body
+        call build_ghost_record(grid, bodies, options, component, status, k_lo, work%ghost_index, &
+                                candidates(1:n_candidates(n), n), nodes%ghost(g))
         if (nodes%ghost(g)%fallback) nodes%n_fallback = nodes%n_fallback + 1
         if (nodes%ghost(g)%fallback .and. nodes%ghost(g)%image_distance <= 0.0_wp) nodes%n_overlap = nodes%n_overlap + 1
         if (nodes%ghost(g)%saturated) nodes%n_saturated = nodes%n_saturated + 1
@@ -345,7 +405,54 @@ contains
       end do
     end associate
     call clear_marked(work, size(bodies))
+  contains
+
+    !> Node (i, j, k) into the ghost or interior list by its status.
+    subroutine list_node(i, j, k)
+      integer, intent(in) :: i, j, k
+      select case (work%status(i, j, k))
+      case (node_ghost)
+        nodes%n_ghost = nodes%n_ghost + 1
+        ! Node and body only: build_ghost_record sets every other field.
+        nodes%ghost(nodes%n_ghost)%node = [i, j, k]
+        nodes%ghost(nodes%n_ghost)%body = work%owner(i, j, k)
+      case (node_interior)
+        nodes%n_interior = nodes%n_interior + 1
+        nodes%interior(:, nodes%n_interior) = [i, j, k]
+        nodes%interior_body(nodes%n_interior) = work%owner(i, j, k)
+      end select
+    end subroutine list_node
   end subroutine classify_component
+
+  !> For each body n, the other bodies its ghosts' fallback test must try (candidates(1:count(n), n),
+  !> ascending): with options%band only those whose bounding sphere can meet an image segment from
+  !> n's surface (the module header), else all of them.
+  subroutine fallback_candidates(grid, bodies, options, candidates, counts)
+    type(fluid_grid_t), intent(in) :: grid
+    type(immersed_body_t), intent(in) :: bodies(:)
+    type(immersed_options_t), intent(in) :: options
+    integer, allocatable, intent(out) :: candidates(:, :), counts(:)
+    real(wp) :: box(3), h_max, reach, radius(size(bodies))
+    integer :: n, m
+    box = [grid%lx, grid%ly, grid%lz]
+    h_max = max(grid%dx, grid%dy, grid%dz)
+    ! The longest image segment, max(d_G, image_cells h_max) with d_G <= h_max, and one cell more.
+    reach = (1.0_wp + max(1.0_wp, merge(options%image_distance_cells, 1.0_wp, trim(options%image_point) == 'image'))) &
+            * h_max
+    radius = max(bodies(:)%shape%a, bodies(:)%shape%b)
+    allocate(candidates(max(1, size(bodies) - 1), size(bodies)), counts(size(bodies)))
+    counts = 0
+    do n = 1, size(bodies)
+      do m = 1, size(bodies)
+        if (m == n) cycle
+        if (options%band) then
+          if (norm2(minimum_image(bodies(m)%centre - bodies(n)%centre, box)) > radius(n) + radius(m) + reach) cycle
+        end if
+        counts(n) = counts(n) + 1
+        candidates(counts(n), n) = m
+      end do
+    end do
+  end subroutine fallback_candidates
 
   !> Work arrays for owner planes k_first..k_last (allocated, all zero, when the grid or the
   !> reach changed; else kept, zero by the invariant) and the body boxes' marks.
@@ -452,6 +559,10 @@ contains
     integer :: i_copies(2), j_copies(2), a, b, nx, ny
     nx = ubound(status, 1) - 1
     ny = ubound(status, 2) - 1
+    if (node(1) > 1 .and. node(1) < nx .and. node(2) > 1 .and. node(2) < ny) then   ! no copy on the ring
+      status(node(1), node(2), node(3)) = value
+      return
+    end if
     i_copies = node(1)
     if (node(1) == nx) i_copies(2) = 0
     if (node(1) == 1) i_copies(2) = nx + 1
@@ -468,14 +579,15 @@ contains
   !> work%owner(i, j, k) = index of the body that contains node (i, j, k) (k local, extended), else
   !> 0 (zero on entry). Only the nodes within each body's lab bounding box are tested; the box's
   !> index sets go to work%marked_* (for clear_marked) and their union to near_*.
-  subroutine mark_solid_nodes(grid, bodies, component, work, near_x, near_y, near_z)
+  subroutine mark_solid_nodes(grid, bodies, options, component, work, near_x, near_y, near_z)
     type(fluid_grid_t), intent(in) :: grid
     type(immersed_body_t), intent(in) :: bodies(:)
+    type(immersed_options_t), intent(in) :: options
     integer, intent(in) :: component
     type(classification_work_t), intent(inout) :: work
     logical, intent(out) :: near_x(:), near_y(:), near_z(work%k_first:)
     integer :: n, i, j, k, previous
-    real(wp) :: box(3), extent(3), x(3), d(3), d_previous, d_new, rotation(3, 3)
+    real(wp) :: box(3), extent(3), x(3), d(3), d_previous, d_new, rotation(3, 3), form(3, 3), margin, q, row_b, row_c
     real(wp) :: sep_x(grid%nx), sep_y(grid%ny)
     type(surface_projection_t) :: p_new, p_old
 
@@ -487,6 +599,11 @@ contains
       do n = 1, size(bodies)
         extent = lab_half_extent(bodies(n))
         rotation = rotation_matrix(bodies(n)%orientation)
+        ! The lab quadratic form A = R diag(a^-2, b^-2, b^-2) R^T and the margin of the row test
+        ! (module header, "Work per body").
+        form = matmul(rotation * spread([1.0_wp / bodies(n)%shape%a**2, 1.0_wp / bodies(n)%shape%b**2, &
+                                         1.0_wp / bodies(n)%shape%b**2], 1, 3), transpose(rotation))
+        margin = 1.0e-9_wp * (max(bodies(n)%shape%a, bodies(n)%shape%b) / min(bodies(n)%shape%a, bodies(n)%shape%b))**2
         do i = 1, grid%nx
           x = node_position(grid, component, i, 1, 1)
           sep_x(i) = minimum_image(x(1) - bodies(n)%centre(1), box(1))
@@ -508,11 +625,25 @@ contains
           do j = 1, grid%ny
             if (.not. in_y(j, n)) cycle
             d(2) = sep_y(j)
+            ! x^T A x - 1 along the row: q(s) = A11 s^2 + 2 row_b s + row_c; skip a row it misses.
+            row_b = form(1, 2) * d(2) + form(1, 3) * d(3)
+            row_c = (form(2, 2) * d(2) + 2.0_wp * form(2, 3) * d(3)) * d(2) + form(3, 3) * d(3)**2 - 1.0_wp
+            if (options%band) then
+              if (row_c - row_b**2 / form(1, 1) > margin) cycle
+            end if
             do i = 1, grid%nx
               if (.not. in_x(i, n)) cycle
               d(1) = sep_x(i)
-              ! Inside test on the body-frame point R^T d.
-              if (.not. (implicit_function(bodies(n)%shape, matmul(d, rotation)) < 0.0_wp)) cycle
+              if (options%band) then
+                q = (form(1, 1) * d(1) + 2.0_wp * row_b) * d(1) + row_c
+                if (q > margin) cycle
+              else
+                q = 0.0_wp
+              end if
+              ! Inside test on the body-frame point R^T d (within the margin, or every node without the band).
+              if (abs(q) <= margin) then
+                if (.not. (implicit_function(bodies(n)%shape, matmul(d, rotation)) < 0.0_wp)) cycle
+              end if
               if (bodies(n)%mesh%level >= 0) then   ! the mesh lies inside the spheroid
                 if (.not. mesh_contains(bodies(n)%mesh, matmul(d, rotation))) cycle
               end if
@@ -538,33 +669,31 @@ contains
 
   !> Closest point, normal, image point (with the other-body fallback) and trilinear stencil of
   !> one ghost node. status covers (1:nx, 1:ny, k_lo:) in extended local k.
-  subroutine build_ghost_record(grid, bodies, options, component, status, k_lo, ghost_index, ghost)
+  subroutine build_ghost_record(grid, bodies, options, component, status, k_lo, ghost_index, others, ghost)
     type(fluid_grid_t), intent(in) :: grid
     type(immersed_body_t), intent(in) :: bodies(:)
     type(immersed_options_t), intent(in) :: options
     integer, intent(in) :: component, k_lo
     integer(int8), intent(in) :: status(:, :, k_lo:)
     integer, intent(in) :: ghost_index(:, :, :)  !< (nx, ny, nz_local) index of each local ghost node, else 0
+    integer, intent(in) :: others(:)             !< the bodies the fallback test tries (fallback_candidates)
     type(ghost_node_t), intent(inout) :: ghost
     type(surface_projection_t) :: projection
     real(wp) :: box(3), spacing(3), centre(3), nearest_entry, entry, saturation_gap, fraction(3), t(3), w(0:1, 3)
-    integer :: n, corner, bits(3), node(3), d, nearest_body
-    type(immersed_body_t) :: body
+    integer :: n, m, corner, bits(3), node(3), d, nearest_body
 
     box = [grid%lx, grid%ly, grid%lz]
     spacing = [grid%dx, grid%dy, grid%dz]
-    ! The pose only: a copy of the whole body would copy its mesh for every ghost node.
-    body%shape = bodies(ghost%body)%shape
-    body%centre = bodies(ghost%body)%centre
-    body%orientation = bodies(ghost%body)%orientation
     ghost%position = node_position(grid, component, ghost%node(1), ghost%node(2), ghost%node(3))
-    ! The image of the body's centre nearest to G: everything below is in G's image frame.
-    centre = ghost%position - minimum_image(ghost%position - body%centre, box)
-    if (bodies(ghost%body)%mesh%level >= 0) then
-      projection = mesh_lab_closest_point(bodies(ghost%body)%mesh, centre, body%orientation, ghost%position)
-    else
-      projection = lab_closest_point(body%shape, centre, body%orientation, ghost%position)
-    end if
+    associate (body => bodies(ghost%body))
+      ! The image of the body's centre nearest to G: everything below is in G's image frame.
+      centre = ghost%position - minimum_image(ghost%position - body%centre, box)
+      if (body%mesh%level >= 0) then
+        projection = mesh_lab_closest_point(body%mesh, centre, body%orientation, ghost%position)
+      else
+        projection = lab_closest_point(body%shape, centre, body%orientation, ghost%position)
+      end if
+    end associate
     ghost%surface_point = projection%point
     ghost%normal = projection%normal
     ! |d|: G is inside by the implicit function; the computed distance can only be off by round-off.
@@ -579,8 +708,8 @@ contains
     ! middle of the gap to the nearest body along n.
     nearest_entry = huge(1.0_wp)
     nearest_body = 0
-    do n = 1, size(bodies)
-      if (n == ghost%body) cycle
+    do m = 1, size(others)
+      n = others(m)
       entry = segment_entry(bodies(n), box, ghost%surface_point, ghost%normal, ghost%image_distance)
       if (entry < nearest_entry) then
         nearest_entry = entry
@@ -667,7 +796,11 @@ contains
   !> Periodic index in 1..n.
   elemental integer function wrap(i, n)
     integer, intent(in) :: i, n
-    wrap = modulo(i - 1, n) + 1
+    if (i >= 1 .and. i <= n) then   ! most indices: no integer division
+      wrap = i
+    else
+      wrap = modulo(i - 1, n) + 1
+    end if
   end function wrap
 
 end module immersed_geometry

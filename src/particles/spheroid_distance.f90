@@ -28,9 +28,9 @@ module spheroid_distance
     real(wp) :: signed_distance = 0.0_wp    !< m, |x - point|, negative for a point inside
   end type surface_projection_t
 
-  !> Bisection steps: enough to reach the last bit of any double-precision root (the interval
-  !> halves each step; 53 bits of mantissa plus the 1074 binary orders down to the smallest
-  !> subnormal), as Eberly's bound; roots of order one need about 50-70 (measured on random points).
+  !> Iterations at most: enough for the bisection alone to reach the last bit of any double-precision
+  !> root (the interval halves each step; 53 bits of mantissa plus the 1074 binary orders down to the
+  !> smallest subnormal), as Eberly's bound; the safeguarded Newton iteration takes far fewer.
   integer, parameter :: max_bisections = 1130
 
 contains
@@ -79,22 +79,32 @@ contains
   end subroutine ellipse_closest_point
 
   !> Root sigma > 0 of G(sigma) = (n0/(sigma + r0m1))^2 + (z1/sigma)^2 - 1, with n0 = r0 z0,
-  !> r0m1 = r0 - 1 >= 0, z1 > 0; G decreases strictly on sigma > 0. Bracket: G(z1) >= 0, and
-  !> G <= 0 at sigma = 1 for a point inside (g < 0) or at sigma = |(n0, z1)| outside (g > 0).
+  !> r0m1 = r0 - 1 >= 0, z1 > 0; G decreases strictly and is convex on sigma > 0. Bracket: G(z1) >= 0,
+  !> and G <= 0 at sigma = 1 for a point inside (g < 0) or at sigma = |(n0, z1)| outside (g > 0).
+  !> Safeguarded Newton iteration: G(1) = g, so sigma = 1 is the root for a point on the surface and
+  !> the start for every point (clamped into the bracket); each evaluation narrows the bracket by the
+  !> sign of G, and a Newton iterate outside the bracket is replaced by its midpoint (the bisection of
+  !> Eberly 2013). By the convexity, after at most one step from the right the iterates rise
+  !> monotonically to the root; the iteration stops when a step no longer changes sigma or the
+  !> bracket has no interior float, i.e. at the root to the last bits, as the bisection alone (about
+  !> 5 evaluations near the surface, where the ghost nodes are, against 50-70 bisection steps). For a
+  !> circle (r0 = 1: a sphere) the root is closed-form, sigma = |(n0, z1)|.
   pure function shifted_root(r0m1, n0, z1, g) result(sigma)
     real(wp), intent(in) :: r0m1, n0, z1, g
-    real(wp) :: sigma, lo, hi, value
+    real(wp) :: sigma, lo, hi, value, slope, next
     integer :: iteration
+    if (r0m1 == 0.0_wp) then   ! a circle (a sphere's meridian): G = |(n0, z1)|^2/sigma^2 - 1
+      sigma = hypot(n0, z1)
+      return
+    end if
     lo = z1
     if (g < 0.0_wp) then
       hi = 1.0_wp
     else
       hi = hypot(n0, z1)
     end if
-    sigma = 0.5_wp * (lo + hi)
+    sigma = min(max(1.0_wp, lo), hi)
     do iteration = 1, max_bisections
-      sigma = 0.5_wp * (lo + hi)
-      if (sigma <= lo .or. sigma >= hi) exit
       value = (n0 / (sigma + r0m1))**2 + (z1 / sigma)**2 - 1.0_wp
       if (value > 0.0_wp) then
         lo = sigma
@@ -103,6 +113,12 @@ contains
       else
         exit
       end if
+      slope = -2.0_wp * (n0**2 / (sigma + r0m1)**3 + z1**2 / sigma**3)
+      next = sigma - value / slope
+      if (next == sigma) exit                                           ! the step is below the last bit
+      if (.not. (next > lo .and. next < hi)) next = 0.5_wp * (lo + hi)
+      if (.not. (next > lo .and. next < hi)) exit                       ! no float left between lo and hi
+      sigma = next
     end do
   end function shifted_root
 

@@ -1,10 +1,12 @@
 !> Cost of the coupled step (immersed bodies in prescribed motion) against the fluid-only step, and
 !> its parts (tools/bench.sh, `make bench`; docs/studies/performance.md, "Immersed boundary").
-!> Usage: mpirun -np R bench_immersed N STEPS BODIES COUPLING [CLOCK [MESH_LEVEL]]
+!> Usage: mpirun -np R bench_immersed N STEPS BODIES COUPLING [CLOCK [MESH_LEVEL [SHAPES]]]
 !>   COUPLING = implicit | explicit; CLOCK = wall (default) | cpu (the process's CPU time: on a shared
 !>   machine the 1-rank figures then do not count the time other processes hold the core);
 !>   MESH_LEVEL >= 0: the ghost nodes see the icosphere of that level (&bodies geometry = 'mesh',
-!>   20 4^level faces), -1 (default) the analytic spheroid.
+!>   20 4^level faces), -1 (default) the analytic spheroid;
+!>   SHAPES = paper (default: needles and disks, below) | sphere (spheres of diameter 10 cells on a
+!>   cubic lattice of ceiling(BODIES^(1/3)) sites per axis, moving and rotating as below).
 !>
 !> Water in a 1 mm box at N^3 with the explicit diffusion (AB2) and the incremental pressure, a
 !> random field of rms 1 mm/s and a uniform drive. Bodies of the paper's size (volume-equivalent
@@ -52,7 +54,7 @@ program bench_immersed
   type(immersed_scene_t) :: scene, parts_scene
   type(prescribed_motion_t), allocatable :: motion(:)
   type(ibm_settings_t) :: settings
-  character(len=32) :: argument, coupling
+  character(len=32) :: argument, coupling, shapes
   logical :: use_cpu_clock
   integer :: n, steps, n_bodies, s, p, ghosts, fallbacks, c, mesh_level
   real(wp), allocatable :: t_fluid(:), t_coupled(:), t_parts(:, :)
@@ -68,6 +70,8 @@ program bench_immersed
   mesh_level = -1
   call get_command_argument(6, argument)
   if (len_trim(argument) > 0) read(argument, *) mesh_level
+  call get_command_argument(7, shapes)
+  if (len_trim(shapes) == 0) shapes = 'paper'
   allocate(t_fluid(steps), t_coupled(steps), t_parts(n_parts, steps))
 
   grid_cfg = grid_config_t(nx=n, ny=n, nz=n, length_x=box, length_y=box, length_z=box)
@@ -116,9 +120,9 @@ program bench_immersed
     write(*, '(i5,i3,i3,1x,a9,3f9.2,*(f9.2))') n, n_ranks, n_bodies, trim(coupling), 1.0e3_wp * median(t_fluid), &
         1.0e3_wp * median(t_coupled), median(t_coupled) / median(t_fluid), &
         [(1.0e3_wp * median(t_parts(p, :)), p = 1, n_parts)]
-    write(*, '(24x,a,i0,a,i0,a,i0,3a,i0)') 'ghost nodes ', ghosts, ', sweeps (u*) ', scene%predicted%sweeps, &
+    write(*, '(24x,a,i0,a,i0,a,i0,3a,i0,2a)') 'ghost nodes ', ghosts, ', sweeps (u*) ', scene%predicted%sweeps, &
         ', fallbacks ', fallbacks, '; clock ', trim(merge('cpu ', 'wall', use_cpu_clock)), &
-        '; icosphere level (-1: analytic) ', mesh_level
+        '; icosphere level (-1: analytic) ', mesh_level, '; shapes ', trim(shapes)
   end if
   call parallel_stop()
 
@@ -138,9 +142,25 @@ contains
     integer, intent(in) :: count
     type(prescribed_motion_t), allocatable :: motion(:)
     real(wp), parameter :: radius = 50.0e-6_wp, aspect = 5.0_wp
-    integer :: m, octant(3)
+    integer :: m, octant(3), sites, site(3)
     allocate(motion(count))
+    if (trim(shapes) == 'sphere') then
+      sites = 1
+      do while (sites**3 < count)
+        sites = sites + 1
+      end do
+    end if
     do m = 1, count
+      if (trim(shapes) == 'sphere') then
+        ! Diameter 10 cells; lattice sites shifted off the grid's symmetry by a fraction of a cell.
+        motion(m)%shape = make_spheroid('sphere', 5.0_wp * box / n, 1.0_wp)
+        site = [mod(m - 1, sites), mod((m - 1) / sites, sites), (m - 1) / sites**2]
+        motion(m)%centre = box * ((0.5_wp + site) / sites + [0.013_wp, 0.027_wp, 0.041_wp] * m / (8 * sites))
+        motion(m)%orientation = quaternion_from_axis_angle([1.0_wp, 2.0_wp, 3.0_wp] + m, 0.3_wp * m)
+        motion(m)%velocity = 1.0e-3_wp * [0.6_wp, -0.5_wp, 0.62_wp] * (1 + mod(m, 3))
+        motion(m)%angular_velocity = 20.0_wp * [0.2_wp, 0.5_wp, -0.84_wp] * (1 - 2 * mod(m, 2))
+        cycle
+      end if
       if (mod(m, 2) == 1) then
         motion(m)%shape = make_spheroid('needle', radius, 1.0_wp, aspect)
       else
