@@ -29,7 +29,8 @@ module hypre_bindings
   public :: HYPRE_ILUCreate, HYPRE_ILUDestroy, HYPRE_ILUSetup, HYPRE_ILUSolve, HYPRE_ILUSetMaxIter, &
             HYPRE_ILUSetType, HYPRE_ILUSetLevelOfFill, HYPRE_ILUSetPrintLevel, HYPRE_ILUSetTol
   public :: agglo_hypre_ij_matrix_create, agglo_hypre_ij_vector_create, agglo_hypre_bicgstab_create, &
-            agglo_hypre_gmres_create, agglo_hypre_par_vector_local_data
+            agglo_hypre_gmres_create, agglo_hypre_par_vector_local_data, agglo_hypre_parcsr_create, &
+            agglo_hypre_parcsr_set_rows, HYPRE_ParCSRMatrixDestroy
 
   integer(c_int), parameter, public :: hypre_parcsr = 5555        !< HYPRE_PARCSR (HYPRE.h)
   integer(c_int), parameter, public :: hypre_error_conv = 256     !< HYPRE_ERROR_CONV (HYPRE_utilities.h)
@@ -319,6 +320,11 @@ module hypre_bindings
       type(c_ptr), value :: solver
       real(c_double), value :: setting
     end function HYPRE_ILUSetTol
+    ! ParCSR matrix (HYPRE_parcsr_mv.h)
+    integer(c_int) function HYPRE_ParCSRMatrixDestroy(matrix) bind(C, name='HYPRE_ParCSRMatrixDestroy')
+      import :: c_int, c_ptr
+      type(c_ptr), value :: matrix
+    end function HYPRE_ParCSRMatrixDestroy
     ! The C shim (hypre_comm_c.c): communicator conversion and the local part of a ParVector
     integer(c_int) function agglo_hypre_ij_matrix_create(comm, ilower, iupper, jlower, jupper, matrix) &
         & bind(C, name='agglo_hypre_ij_matrix_create')
@@ -349,5 +355,24 @@ module hypre_bindings
       type(c_ptr), value :: vector
       integer(c_int), intent(out) :: size
     end function agglo_hypre_par_vector_local_data
+    !> A ParCSR matrix from this rank's rows in CSR form (sparse_rows_t's layout; hypre_comm_c.c).
+    !> Rows over_rows (ascending) come from the compact CSR over_start, over_columns, over_values.
+    integer(c_int) function agglo_hypre_parcsr_create(comm, first_row, last_row, global_rows, row_start, columns, &
+        values, n_over, over_rows, over_start, over_columns, over_values, matrix) bind(C, name='agglo_hypre_parcsr_create')
+      import :: c_int, c_ptr, c_double
+      integer(c_int), value :: comm, first_row, last_row, global_rows, n_over
+      integer(c_int), intent(in) :: row_start(*), columns(*), over_rows(*), over_start(*), over_columns(*)
+      real(c_double), intent(in) :: values(*), over_values(*)
+      type(c_ptr), intent(out) :: matrix
+    end function agglo_hypre_parcsr_create
+    !> New values of listed local rows (1-based), in compact CSR form, on the matrix's pattern.
+    integer(c_int) function agglo_hypre_parcsr_set_rows(matrix, n_set, rows, row_start, columns, values) &
+        bind(C, name='agglo_hypre_parcsr_set_rows')
+      import :: c_int, c_ptr, c_double
+      type(c_ptr), value :: matrix
+      integer(c_int), value :: n_set
+      integer(c_int), intent(in) :: rows(*), row_start(*), columns(*)
+      real(c_double), intent(in) :: values(*)
+    end function agglo_hypre_parcsr_set_rows
   end interface
 end module hypre_bindings
