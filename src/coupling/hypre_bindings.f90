@@ -9,8 +9,6 @@ module hypre_bindings
   implicit none
   private
   public :: HYPRE_Init, HYPRE_ClearAllErrors
-  public :: HYPRE_IJMatrixSetObjectType, HYPRE_IJMatrixSetDiagOffdSizes, HYPRE_IJMatrixInitialize, &
-            HYPRE_IJMatrixSetValues, HYPRE_IJMatrixAssemble, HYPRE_IJMatrixGetObject, HYPRE_IJMatrixDestroy
   public :: HYPRE_IJVectorSetObjectType, HYPRE_IJVectorInitialize, HYPRE_IJVectorAssemble, &
             HYPRE_IJVectorGetObject, HYPRE_IJVectorDestroy
   public :: HYPRE_ParCSRBiCGSTABSetTol, HYPRE_ParCSRBiCGSTABSetMaxIter, HYPRE_ParCSRBiCGSTABSetLogging, &
@@ -28,7 +26,7 @@ module hypre_bindings
             HYPRE_BoomerAMGSetStrongThreshold
   public :: HYPRE_ILUCreate, HYPRE_ILUDestroy, HYPRE_ILUSetup, HYPRE_ILUSolve, HYPRE_ILUSetMaxIter, &
             HYPRE_ILUSetType, HYPRE_ILUSetLevelOfFill, HYPRE_ILUSetPrintLevel, HYPRE_ILUSetTol
-  public :: agglo_hypre_ij_matrix_create, agglo_hypre_ij_vector_create, agglo_hypre_bicgstab_create, &
+  public :: agglo_hypre_ij_vector_create, agglo_hypre_bicgstab_create, &
             agglo_hypre_gmres_create, agglo_hypre_par_vector_local_data, agglo_hypre_parcsr_create, &
             agglo_hypre_parcsr_set_rows, HYPRE_ParCSRMatrixDestroy
 
@@ -43,43 +41,6 @@ module hypre_bindings
     integer(c_int) function HYPRE_ClearAllErrors() bind(C, name='HYPRE_ClearAllErrors')
       import :: c_int
     end function HYPRE_ClearAllErrors
-    ! IJ matrix (HYPRE_IJ_mv.h); indices are HYPRE_BigInt = int in this build (no --enable-bigint)
-    integer(c_int) function HYPRE_IJMatrixSetObjectType(object, object_type) bind(C, name='HYPRE_IJMatrixSetObjectType')
-      import :: c_int, c_ptr
-      type(c_ptr), value :: object
-      integer(c_int), value :: object_type
-    end function HYPRE_IJMatrixSetObjectType
-    integer(c_int) function HYPRE_IJMatrixSetDiagOffdSizes(matrix, diag_sizes, offd_sizes) &
-        & bind(C, name='HYPRE_IJMatrixSetDiagOffdSizes')
-      import :: c_int, c_ptr
-      type(c_ptr), value :: matrix
-      integer(c_int), intent(in) :: diag_sizes(*), offd_sizes(*)
-    end function HYPRE_IJMatrixSetDiagOffdSizes
-    integer(c_int) function HYPRE_IJMatrixInitialize(matrix) bind(C, name='HYPRE_IJMatrixInitialize')
-      import :: c_int, c_ptr
-      type(c_ptr), value :: matrix
-    end function HYPRE_IJMatrixInitialize
-    integer(c_int) function HYPRE_IJMatrixSetValues(matrix, n_rows, n_columns, rows, columns, values) &
-        & bind(C, name='HYPRE_IJMatrixSetValues')
-      import :: c_int, c_ptr, c_double
-      type(c_ptr), value :: matrix
-      integer(c_int), value :: n_rows
-      integer(c_int), intent(in) :: n_columns(*), rows(*), columns(*)
-      real(c_double), intent(in) :: values(*)
-    end function HYPRE_IJMatrixSetValues
-    integer(c_int) function HYPRE_IJMatrixAssemble(matrix) bind(C, name='HYPRE_IJMatrixAssemble')
-      import :: c_int, c_ptr
-      type(c_ptr), value :: matrix
-    end function HYPRE_IJMatrixAssemble
-    integer(c_int) function HYPRE_IJMatrixGetObject(matrix, object) bind(C, name='HYPRE_IJMatrixGetObject')
-      import :: c_int, c_ptr
-      type(c_ptr), value :: matrix
-      type(c_ptr), intent(out) :: object
-    end function HYPRE_IJMatrixGetObject
-    integer(c_int) function HYPRE_IJMatrixDestroy(matrix) bind(C, name='HYPRE_IJMatrixDestroy')
-      import :: c_int, c_ptr
-      type(c_ptr), value :: matrix
-    end function HYPRE_IJMatrixDestroy
     ! IJ vector (HYPRE_IJ_mv.h)
     integer(c_int) function HYPRE_IJVectorSetObjectType(object, object_type) bind(C, name='HYPRE_IJVectorSetObjectType')
       import :: c_int, c_ptr
@@ -326,12 +287,6 @@ module hypre_bindings
       type(c_ptr), value :: matrix
     end function HYPRE_ParCSRMatrixDestroy
     ! The C shim (hypre_comm_c.c): communicator conversion and the local part of a ParVector
-    integer(c_int) function agglo_hypre_ij_matrix_create(comm, ilower, iupper, jlower, jupper, matrix) &
-        & bind(C, name='agglo_hypre_ij_matrix_create')
-      import :: c_int, c_ptr
-      integer(c_int), value :: comm, ilower, iupper, jlower, jupper
-      type(c_ptr), intent(out) :: matrix
-    end function agglo_hypre_ij_matrix_create
     integer(c_int) function agglo_hypre_ij_vector_create(comm, jlower, jupper, vector) bind(C, name='agglo_hypre_ij_vector_create')
       import :: c_int, c_ptr
       integer(c_int), value :: comm, jlower, jupper

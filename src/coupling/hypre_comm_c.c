@@ -17,12 +17,6 @@
 #include "HYPRE_parcsr_ls.h"
 #include "_hypre_parcsr_mv.h"
 
-HYPRE_Int agglo_hypre_ij_matrix_create(MPI_Fint comm, HYPRE_BigInt ilower, HYPRE_BigInt iupper,
-                                       HYPRE_BigInt jlower, HYPRE_BigInt jupper, HYPRE_IJMatrix *matrix)
-{
-  return HYPRE_IJMatrixCreate(MPI_Comm_f2c(comm), ilower, iupper, jlower, jupper, matrix);
-}
-
 HYPRE_Int agglo_hypre_ij_vector_create(MPI_Fint comm, HYPRE_BigInt jlower, HYPRE_BigInt jupper,
                                        HYPRE_IJVector *vector)
 {

@@ -19,9 +19,9 @@
 !> and compared with the last matrix's: when every ghost and interior node kept its status and
 !> every ghost row its stencil nodes (a sub-cell move), their new values are written into the
 !> matrix in place (the fluid rows, (I - alpha L_h), have not changed); otherwise the matrix of the
-!> new pattern is built (full_builds counts these, per component). A new alpha (a new dt) gives
-!> every row new values on the same pattern. The Krylov solver and its vectors are set up once per
-!> component and kept across steps and matrices.
+!> new pattern is built (full_builds counts these, per component), in one pass over the Helmholtz
+!> rows with the body rows in their place; a new alpha (a new dt) builds it again likewise. The
+!> Krylov solver and its vectors are set up once per component and kept across steps and matrices.
 !>
 !> Loads: the momentum the body rows add is what the momentum-balance loads of immersed_boundary
 !> need. Summed over the periodic box, sum (I - alpha L_h) u = sum u, so the system adds to the
@@ -59,7 +59,7 @@ module immersed_predictor
   !> The system of one velocity component.
   type :: component_system_t
     !> The ghost and interior rows of the matrix, in ascending local row order, in compact CSR form
-    !> (the entries of local row body%rows(s) are body%start(s) .. body%start(s + 1) - 1).
+    !> (the entries of local row body_rows(s) are body%row_start(s) .. body%row_start(s + 1) - 1).
     integer, allocatable :: body_rows(:)
     type(sparse_rows_t) :: body
     type(linear_solver_t) :: solver
@@ -322,8 +322,8 @@ contains
       end do
       n_body = nodes%n_ghost + nodes%n_interior
       sys%body_rows = pack([(r, r = 1, n_local)], in_list /= 0)
-      if (size(sys%body_rows) /= n_body) call fatal('immersed predictor: two body records on one node', &
-                                                    collective=.false.)
+      if (size(sys%body_rows) /= n_body) call fatal('immersed predictor: two ghost or interior records on one '// &
+                                                    'node (the classification owns each node once)', collective=.false.)
       if (allocated(sys%body%row_start)) deallocate(sys%body%row_start)
       if (allocated(sys%body%columns)) deallocate(sys%body%columns)
       if (allocated(sys%body%values)) deallocate(sys%body%values)
@@ -357,7 +357,6 @@ contains
       sys%body%values = sys%body%values(1:entry)
     end associate
   end subroutine assemble_body_rows
-
 
   !> Solve component c: b from field, the body rows' right-hand sides, the Krylov solve from the
   !> first guess; u* back into field (interior). Stops the run if it does not converge.
