@@ -9,8 +9,6 @@ module hypre_bindings
   implicit none
   private
   public :: HYPRE_Init, HYPRE_ClearAllErrors
-  public :: HYPRE_IJMatrixSetObjectType, HYPRE_IJMatrixSetDiagOffdSizes, HYPRE_IJMatrixInitialize, &
-            HYPRE_IJMatrixSetValues, HYPRE_IJMatrixAssemble, HYPRE_IJMatrixGetObject, HYPRE_IJMatrixDestroy
   public :: HYPRE_IJVectorSetObjectType, HYPRE_IJVectorInitialize, HYPRE_IJVectorAssemble, &
             HYPRE_IJVectorGetObject, HYPRE_IJVectorDestroy
   public :: HYPRE_ParCSRBiCGSTABSetTol, HYPRE_ParCSRBiCGSTABSetMaxIter, HYPRE_ParCSRBiCGSTABSetLogging, &
@@ -28,8 +26,9 @@ module hypre_bindings
             HYPRE_BoomerAMGSetStrongThreshold
   public :: HYPRE_ILUCreate, HYPRE_ILUDestroy, HYPRE_ILUSetup, HYPRE_ILUSolve, HYPRE_ILUSetMaxIter, &
             HYPRE_ILUSetType, HYPRE_ILUSetLevelOfFill, HYPRE_ILUSetPrintLevel, HYPRE_ILUSetTol
-  public :: agglo_hypre_ij_matrix_create, agglo_hypre_ij_vector_create, agglo_hypre_bicgstab_create, &
-            agglo_hypre_gmres_create, agglo_hypre_par_vector_local_data
+  public :: agglo_hypre_ij_vector_create, agglo_hypre_bicgstab_create, &
+            agglo_hypre_gmres_create, agglo_hypre_par_vector_local_data, agglo_hypre_parcsr_create, &
+            agglo_hypre_parcsr_set_rows, HYPRE_ParCSRMatrixDestroy
 
   integer(c_int), parameter, public :: hypre_parcsr = 5555        !< HYPRE_PARCSR (HYPRE.h)
   integer(c_int), parameter, public :: hypre_error_conv = 256     !< HYPRE_ERROR_CONV (HYPRE_utilities.h)
@@ -42,43 +41,6 @@ module hypre_bindings
     integer(c_int) function HYPRE_ClearAllErrors() bind(C, name='HYPRE_ClearAllErrors')
       import :: c_int
     end function HYPRE_ClearAllErrors
-    ! IJ matrix (HYPRE_IJ_mv.h); indices are HYPRE_BigInt = int in this build (no --enable-bigint)
-    integer(c_int) function HYPRE_IJMatrixSetObjectType(object, object_type) bind(C, name='HYPRE_IJMatrixSetObjectType')
-      import :: c_int, c_ptr
-      type(c_ptr), value :: object
-      integer(c_int), value :: object_type
-    end function HYPRE_IJMatrixSetObjectType
-    integer(c_int) function HYPRE_IJMatrixSetDiagOffdSizes(matrix, diag_sizes, offd_sizes) &
-        & bind(C, name='HYPRE_IJMatrixSetDiagOffdSizes')
-      import :: c_int, c_ptr
-      type(c_ptr), value :: matrix
-      integer(c_int), intent(in) :: diag_sizes(*), offd_sizes(*)
-    end function HYPRE_IJMatrixSetDiagOffdSizes
-    integer(c_int) function HYPRE_IJMatrixInitialize(matrix) bind(C, name='HYPRE_IJMatrixInitialize')
-      import :: c_int, c_ptr
-      type(c_ptr), value :: matrix
-    end function HYPRE_IJMatrixInitialize
-    integer(c_int) function HYPRE_IJMatrixSetValues(matrix, n_rows, n_columns, rows, columns, values) &
-        & bind(C, name='HYPRE_IJMatrixSetValues')
-      import :: c_int, c_ptr, c_double
-      type(c_ptr), value :: matrix
-      integer(c_int), value :: n_rows
-      integer(c_int), intent(in) :: n_columns(*), rows(*), columns(*)
-      real(c_double), intent(in) :: values(*)
-    end function HYPRE_IJMatrixSetValues
-    integer(c_int) function HYPRE_IJMatrixAssemble(matrix) bind(C, name='HYPRE_IJMatrixAssemble')
-      import :: c_int, c_ptr
-      type(c_ptr), value :: matrix
-    end function HYPRE_IJMatrixAssemble
-    integer(c_int) function HYPRE_IJMatrixGetObject(matrix, object) bind(C, name='HYPRE_IJMatrixGetObject')
-      import :: c_int, c_ptr
-      type(c_ptr), value :: matrix
-      type(c_ptr), intent(out) :: object
-    end function HYPRE_IJMatrixGetObject
-    integer(c_int) function HYPRE_IJMatrixDestroy(matrix) bind(C, name='HYPRE_IJMatrixDestroy')
-      import :: c_int, c_ptr
-      type(c_ptr), value :: matrix
-    end function HYPRE_IJMatrixDestroy
     ! IJ vector (HYPRE_IJ_mv.h)
     integer(c_int) function HYPRE_IJVectorSetObjectType(object, object_type) bind(C, name='HYPRE_IJVectorSetObjectType')
       import :: c_int, c_ptr
@@ -319,13 +281,12 @@ module hypre_bindings
       type(c_ptr), value :: solver
       real(c_double), value :: setting
     end function HYPRE_ILUSetTol
-    ! The C shim (hypre_comm_c.c): communicator conversion and the local part of a ParVector
-    integer(c_int) function agglo_hypre_ij_matrix_create(comm, ilower, iupper, jlower, jupper, matrix) &
-        & bind(C, name='agglo_hypre_ij_matrix_create')
+    ! ParCSR matrix (HYPRE_parcsr_mv.h)
+    integer(c_int) function HYPRE_ParCSRMatrixDestroy(matrix) bind(C, name='HYPRE_ParCSRMatrixDestroy')
       import :: c_int, c_ptr
-      integer(c_int), value :: comm, ilower, iupper, jlower, jupper
-      type(c_ptr), intent(out) :: matrix
-    end function agglo_hypre_ij_matrix_create
+      type(c_ptr), value :: matrix
+    end function HYPRE_ParCSRMatrixDestroy
+    ! The C shim (hypre_comm_c.c): communicator conversion and the local part of a ParVector
     integer(c_int) function agglo_hypre_ij_vector_create(comm, jlower, jupper, vector) bind(C, name='agglo_hypre_ij_vector_create')
       import :: c_int, c_ptr
       integer(c_int), value :: comm, jlower, jupper
@@ -349,5 +310,24 @@ module hypre_bindings
       type(c_ptr), value :: vector
       integer(c_int), intent(out) :: size
     end function agglo_hypre_par_vector_local_data
+    !> A ParCSR matrix from this rank's rows in CSR form (sparse_rows_t's layout; hypre_comm_c.c).
+    !> Rows over_rows (ascending) come from the compact CSR over_start, over_columns, over_values.
+    integer(c_int) function agglo_hypre_parcsr_create(comm, first_row, last_row, global_rows, row_start, columns, &
+        values, n_over, over_rows, over_start, over_columns, over_values, matrix) bind(C, name='agglo_hypre_parcsr_create')
+      import :: c_int, c_ptr, c_double
+      integer(c_int), value :: comm, first_row, last_row, global_rows, n_over
+      integer(c_int), intent(in) :: row_start(*), columns(*), over_rows(*), over_start(*), over_columns(*)
+      real(c_double), intent(in) :: values(*), over_values(*)
+      type(c_ptr), intent(out) :: matrix
+    end function agglo_hypre_parcsr_create
+    !> New values of listed local rows (1-based), in compact CSR form, on the matrix's pattern.
+    integer(c_int) function agglo_hypre_parcsr_set_rows(matrix, n_set, rows, row_start, columns, values) &
+        bind(C, name='agglo_hypre_parcsr_set_rows')
+      import :: c_int, c_ptr, c_double
+      type(c_ptr), value :: matrix
+      integer(c_int), value :: n_set
+      integer(c_int), intent(in) :: rows(*), row_start(*), columns(*)
+      real(c_double), intent(in) :: values(*)
+    end function agglo_hypre_parcsr_set_rows
   end interface
 end module hypre_bindings

@@ -3,12 +3,17 @@
 !> divides each Fourier mode by 1 + c times the modified wavenumber squared of the same 7-point
 !> stencil). With immersed-boundary ghost rows in the system it is the inverse of the operator
 !> everywhere but in those rows (docs/theory.md, "Linear solver (hypre)").
+!>
+!> Applied in place: the residual's rows go straight into the FFT's own buffer and the solution
+!> straight from it into hypre's correction vector (the rows of a slab are its x-lines in (j, k)
+!> order, the buffer's layout without the padding), two passes over the data against four with a
+!> field in between; the same arithmetic, so the same bits.
 module hypre_fft_preconditioner
   use agglo_kinds, only: wp
-  use fluid_grid, only: fluid_grid_t, allocate_field
-  use poisson_fft, only: poisson_fft_t, helmholtz_solve
+  use fluid_grid, only: fluid_grid_t
+  use poisson_fft, only: poisson_fft_t, helmholtz_solve_in_buffer
+  use timer_registry, only: timer_register, timer_tic, timer_toc
   use hypre_solver, only: user_preconditioner_t
-  use hypre_helmholtz_rows, only: field_to_rows, rows_to_field
   implicit none
   private
   public :: fft_helmholtz_preconditioner_t, fft_preconditioner_create
@@ -17,7 +22,7 @@ module hypre_fft_preconditioner
     type(fluid_grid_t), pointer :: grid => null()
     type(poisson_fft_t), pointer :: fft => null()
     real(wp) :: coefficient = 0                    !< c = nu dt / 2
-    real(wp), allocatable :: work(:, :, :)         !< one field, allocated once
+    integer :: timer = 0                           !< 'FFT preconditioner' (timer_registry)
     !> Rows the caller replaced (ghost and interior rows of bodies): their correction is the
     !> Jacobi one, residual / diagonal, instead of the FFT's (none if not allocated).
     integer, allocatable :: replaced_rows(:)       !< local row numbers
@@ -38,16 +43,32 @@ contains
     preconditioner%grid => grid
     preconditioner%fft => fft
     preconditioner%coefficient = coefficient
-    call allocate_field(grid, preconditioner%work)
+    preconditioner%timer = timer_register('  FFT preconditioner')
   end subroutine fft_preconditioner_create
 
   subroutine apply_fft_helmholtz(self, residual, correction)
     class(fft_helmholtz_preconditioner_t), intent(inout) :: self
     real(wp), intent(in) :: residual(:)
     real(wp), intent(out) :: correction(:)
-    call rows_to_field(self%grid, residual, self%work)
-    call helmholtz_solve(self%fft, self%work, self%coefficient)
-    call field_to_rows(self%grid, self%work, correction)
+    integer :: j, k, first, nx
+    call timer_tic(self%timer)
+    nx = self%grid%nx
+    associate (fft => self%fft)
+      do k = 1, self%grid%nz_local
+        do j = 1, self%grid%ny
+          first = nx * ((j - 1) + self%grid%ny * (k - 1))
+          fft%real_view(1:nx, j, k) = residual(first + 1:first + nx)
+        end do
+      end do
+      call helmholtz_solve_in_buffer(fft, self%coefficient)
+      do k = 1, self%grid%nz_local
+        do j = 1, self%grid%ny
+          first = nx * ((j - 1) + self%grid%ny * (k - 1))
+          correction(first + 1:first + nx) = fft%real_view(1:nx, j, k) * fft%normalisation
+        end do
+      end do
+    end associate
     if (allocated(self%replaced_rows)) correction(self%replaced_rows) = residual(self%replaced_rows) / self%replaced_diagonal
+    call timer_toc(self%timer)
   end subroutine apply_fft_helmholtz
 end module hypre_fft_preconditioner

@@ -3,24 +3,25 @@
 !>
 !> Each rank hands over its block of rows in CSR form (sparse_rows_t): global rows
 !> first_row .. last_row, numbered from 1 and contiguous per rank in rank order, exactly as
-!> hypre_helmholtz_rows numbers the unknowns of a slab-decomposed field. The solver assembles an
-!> IJ matrix with a ParCSR object behind it (hypre reference manual, "IJ System Interface"),
-!> keeps the structure across solves (linear_solver_update_values replaces only the values) and
-!> solves with BiCGSTAB or GMRES preconditioned by BoomerAMG, ILU(0), nothing, or a caller's
-!> preconditioner (user_preconditioner_t, e.g. the FFT Helmholtz solve). Every solve returns a
+!> hypre_helmholtz_rows numbers the unknowns of a slab-decomposed field. The solver builds hypre's
+!> ParCSR matrix straight from those rows (hypre_comm_c.c: two linear passes, where the IJ
+!> interface's SetValues + Assemble hash and sort every entry), keeps it across solves
+!> (linear_solver_update_values writes new values of all or some rows into it in place;
+!> linear_solver_replace_matrix swaps in a matrix of another pattern and keeps the vectors and the
+!> Krylov solver) and solves with BiCGSTAB or GMRES preconditioned by BoomerAMG, ILU(0), nothing,
+!> or a caller's preconditioner (user_preconditioner_t, e.g. the FFT Helmholtz solve). Every solve returns a
 !> solve_status_t; the caller decides whether non-convergence stops the run (solve_status_text
 !> gives the message with both numbers and the advice).
 module hypre_solver
   use, intrinsic :: iso_c_binding, only: c_int, c_double, c_ptr, c_null_ptr, c_associated, c_loc, c_funloc, &
                                          c_f_pointer
-  use mpi_f08, only: MPI_Comm
+  use mpi_f08, only: MPI_Comm, MPI_Allreduce, MPI_IN_PLACE, MPI_INTEGER, MPI_MAX
   use agglo_kinds, only: wp
   use parallel_env, only: world
   use error_handling, only: fatal
-  use timer_registry, only: timer_tic, timer_toc
+  use timer_registry, only: timer_register, timer_tic, timer_toc
   use hypre_bindings, only: hypre_parcsr, hypre_error_conv, HYPRE_Init, HYPRE_ClearAllErrors, &
-      HYPRE_IJMatrixSetObjectType, HYPRE_IJMatrixSetDiagOffdSizes, HYPRE_IJMatrixInitialize, &
-      HYPRE_IJMatrixSetValues, HYPRE_IJMatrixAssemble, HYPRE_IJMatrixGetObject, HYPRE_IJMatrixDestroy, &
+      HYPRE_ParCSRMatrixDestroy, agglo_hypre_parcsr_create, agglo_hypre_parcsr_set_rows, &
       HYPRE_IJVectorSetObjectType, HYPRE_IJVectorInitialize, HYPRE_IJVectorAssemble, HYPRE_IJVectorGetObject, &
       HYPRE_IJVectorDestroy, &
       HYPRE_ParCSRBiCGSTABSetTol, HYPRE_ParCSRBiCGSTABSetMaxIter, HYPRE_ParCSRBiCGSTABSetLogging, &
@@ -36,13 +37,13 @@ module hypre_solver
       HYPRE_BoomerAMGSetPrintLevel, HYPRE_BoomerAMGSetTol, HYPRE_BoomerAMGSetStrongThreshold, &
       HYPRE_ILUCreate, HYPRE_ILUDestroy, HYPRE_ILUSetup, HYPRE_ILUSolve, HYPRE_ILUSetMaxIter, HYPRE_ILUSetType, &
       HYPRE_ILUSetLevelOfFill, HYPRE_ILUSetPrintLevel, HYPRE_ILUSetTol, &
-      agglo_hypre_ij_matrix_create, agglo_hypre_ij_vector_create, agglo_hypre_bicgstab_create, &
+      agglo_hypre_ij_vector_create, agglo_hypre_bicgstab_create, &
       agglo_hypre_gmres_create, agglo_hypre_par_vector_local_data
   implicit none
   private
   public :: sparse_rows_t, linear_solver_config_t, solve_status_t, user_preconditioner_t, linear_solver_t
-  public :: linear_solver_create, linear_solver_update_values, linear_solver_solve, linear_solver_destroy, &
-            solve_status_text, rows_local_count
+  public :: linear_solver_create, linear_solver_update_values, linear_solver_replace_matrix, linear_solver_solve, &
+            linear_solver_destroy, solve_status_text, rows_local_count
   public :: solver_methods, solver_preconditioners
 
   character(len=*), parameter :: solver_methods = 'bicgstab, gmres'
@@ -102,9 +103,9 @@ module hypre_solver
     private
     type(linear_solver_config_t) :: config
     integer(c_int) :: communicator = 0             !< Fortran handle of the ranks that share the system
-    integer :: first_row = 1, last_row = 0, n_entries = 0
-    integer(c_int), allocatable :: row_numbers(:), entries_per_row(:), columns(:)
-    type(c_ptr) :: ij_matrix = c_null_ptr, matrix = c_null_ptr
+    integer :: first_row = 1, last_row = 0, n_entries = 0, global_rows = 0
+    integer :: timer_matrix = 0                    !< 'hypre matrices' (timer_registry): building, new values
+    type(c_ptr) :: matrix = c_null_ptr             !< the ParCSR matrix (hypre_comm_c.c)
     type(c_ptr) :: ij_rhs = c_null_ptr, rhs = c_null_ptr, ij_solution = c_null_ptr, solution = c_null_ptr
     type(c_ptr) :: krylov = c_null_ptr, precond = c_null_ptr
     real(c_double), pointer, contiguous :: rhs_local(:) => null(), solution_local(:) => null()
@@ -125,14 +126,15 @@ contains
   !> (collective over communicator, by default every rank). preconditioner must be given when
   !> config%preconditioner = 'user'; the solver keeps a pointer to it, so the actual argument must
   !> have the target attribute and outlive the solver.
-  subroutine linear_solver_create(solver, rows, config, preconditioner, communicator)
+  subroutine linear_solver_create(solver, rows, config, preconditioner, communicator, replaced, replaced_rows)
     type(linear_solver_t), intent(inout) :: solver
     type(sparse_rows_t), intent(in) :: rows
     type(linear_solver_config_t), intent(in) :: config
     class(user_preconditioner_t), intent(inout), target, optional :: preconditioner
     type(MPI_Comm), intent(in), optional :: communicator
-    integer :: r, n_local
-    integer(c_int), allocatable :: diag_sizes(:), offd_sizes(:)
+    type(sparse_rows_t), intent(in), optional :: replaced   !< rows replacing those of rows (build_matrix)
+    integer, intent(in), optional :: replaced_rows(:)
+    type(MPI_Comm) :: comm
 
     call check_config(config, present(preconditioner))
     call linear_solver_destroy(solver)
@@ -140,32 +142,16 @@ contains
       call require_ok(HYPRE_Init(), 'HYPRE_Init')
       hypre_started = .true.
     end if
+    solver%timer_matrix = timer_register('hypre matrices')
     solver%config = config
-    solver%communicator = int(world%MPI_VAL, c_int)
-    if (present(communicator)) solver%communicator = int(communicator%MPI_VAL, c_int)
+    comm = world
+    if (present(communicator)) comm = communicator
+    solver%communicator = int(comm%MPI_VAL, c_int)
     solver%first_row = rows%first_row
     solver%last_row = rows%last_row
-    n_local = rows_local_count(rows)
-    solver%n_entries = rows%row_start(n_local + 1) - 1
-    solver%row_numbers = [(int(r, c_int), r = rows%first_row, rows%last_row)]
-    solver%entries_per_row = int(rows%row_start(2:n_local + 1) - rows%row_start(1:n_local), c_int)
-    solver%columns = int(rows%columns(1:solver%n_entries), c_int)
-
-    ! Preallocate the diagonal block (columns this rank owns) and the off-diagonal block per row:
-    ! without it hypre grows the rows while inserting (reference manual, HYPRE_IJMatrixSetDiagOffdSizes).
-    allocate(diag_sizes(n_local), offd_sizes(n_local))
-    do r = 1, n_local
-      associate(owned => rows%columns(rows%row_start(r):rows%row_start(r + 1) - 1))
-        diag_sizes(r) = int(count(owned >= rows%first_row .and. owned <= rows%last_row), c_int)
-        offd_sizes(r) = int(size(owned), c_int) - diag_sizes(r)
-      end associate
-    end do
-    call require_ok(agglo_hypre_ij_matrix_create(solver%communicator, solver%first_row, solver%last_row, &
-                    solver%first_row, solver%last_row, solver%ij_matrix), 'HYPRE_IJMatrixCreate')
-    call require_ok(HYPRE_IJMatrixSetObjectType(solver%ij_matrix, hypre_parcsr), 'HYPRE_IJMatrixSetObjectType')
-    call require_ok(HYPRE_IJMatrixSetDiagOffdSizes(solver%ij_matrix, diag_sizes, offd_sizes), &
-                    'HYPRE_IJMatrixSetDiagOffdSizes')
-    call set_matrix_values(solver, rows)
+    solver%global_rows = rows%last_row
+    call MPI_Allreduce(MPI_IN_PLACE, solver%global_rows, 1, MPI_INTEGER, MPI_MAX, comm)
+    call build_matrix(solver, rows, replaced, replaced_rows)
 
     call make_vector(solver, solver%ij_rhs, solver%rhs, solver%rhs_local)
     call make_vector(solver, solver%ij_solution, solver%solution, solver%solution_local)
@@ -177,26 +163,65 @@ contains
   end subroutine linear_solver_create
 
   !> New values on the same sparsity pattern (e.g. a new dt, or ghost weights after a sub-cell
-  !> move): the assembled matrix is re-initialised and overwritten in place (HYPRE_IJMatrixInitialize
-  !> "will also re-initialize an already assembled matrix, allowing users to modify coefficient
-  !> values", reference manual); the preconditioner is set up again on the next solve.
-  subroutine linear_solver_update_values(solver, rows)
+  !> move), written into the matrix in place: all rows, or only the local rows listed in
+  !> changed_rows (ascending or not; then rows holds just those rows, in that order, in compact
+  !> CSR form: the entries of the s-th listed row are row_start(s) .. row_start(s + 1) - 1).
+  !> A row whose pattern differs from the matrix's stops the run. With BoomerAMG or ILU the
+  !> preconditioner is set up again on the next solve; the FFT (user) preconditioner and none have
+  !> no set-up that depends on the values, so the Krylov solver is kept as it is.
+  subroutine linear_solver_update_values(solver, rows, changed_rows)
     type(linear_solver_t), intent(inout) :: solver
     type(sparse_rows_t), intent(in) :: rows
+    integer, intent(in), optional :: changed_rows(:)
     character(len=200) :: text
-    if (rows%first_row /= solver%first_row .or. rows%last_row /= solver%last_row .or. &
-        rows%row_start(rows_local_count(rows) + 1) - 1 /= solver%n_entries) then
-      write(text, '(a,i0,a,i0,a,i0,a)') 'linear_solver_update_values: the rows (', rows%first_row, ' .. ', &
-          rows%last_row, ', ', rows%row_start(rows_local_count(rows) + 1) - 1, &
-          ' entries) do not have the structure the solver was created with; create a new solver'
+    integer :: r
+    integer(c_int) :: ierr
+    call timer_tic(solver%timer_matrix)
+    if (present(changed_rows)) then
+      ierr = agglo_hypre_parcsr_set_rows(solver%matrix, int(size(changed_rows), c_int), int(changed_rows, c_int), &
+                                         int(rows%row_start, c_int), int(rows%columns, c_int), real(rows%values, c_double))
+    else if (rows%first_row /= solver%first_row .or. rows%last_row /= solver%last_row .or. &
+             rows%row_start(rows_local_count(rows) + 1) - 1 /= solver%n_entries) then
+      ierr = 1
+    else
+      ierr = agglo_hypre_parcsr_set_rows(solver%matrix, int(rows_local_count(rows), c_int), &
+                                         [(int(r, c_int), r = 1, rows_local_count(rows))], int(rows%row_start, c_int), &
+                                         int(rows%columns, c_int), real(rows%values, c_double))
+    end if
+    if (ierr /= 0) then
+      write(text, '(a,i0,a,i0,a)') 'linear_solver_update_values: the rows (', rows%first_row, ' .. ', &
+          rows%last_row, ') do not have the structure the solver was created with; create a new solver'
       call fatal(trim(text), collective=.false.)
     end if
-    call set_matrix_values(solver, rows)
-    ! Re-make the Krylov solver and preconditioner so the setup sees the new values (BoomerAMG and
-    ! ILU build their hierarchy / factors from the matrix at setup time).
-    call destroy_krylov(solver)
-    call make_krylov(solver)
+    if (solver%config%preconditioner == 'boomeramg' .or. solver%config%preconditioner == 'ilu') then
+      ! Their setup builds the hierarchy / factors from the values: new Krylov and preconditioner objects.
+      call destroy_krylov(solver)
+      call make_krylov(solver)
+    end if
+    call timer_toc(solver%timer_matrix)
   end subroutine linear_solver_update_values
+
+  !> A matrix of another sparsity pattern on the same rows (e.g. nodes that changed status): the
+  !> new ParCSR matrix replaces the old one; the vectors and the Krylov solver are kept (its next
+  !> solve sets it up on the new matrix: with the FFT preconditioner that allocates nothing).
+  subroutine linear_solver_replace_matrix(solver, rows, replaced, replaced_rows)
+    type(linear_solver_t), intent(inout) :: solver
+    type(sparse_rows_t), intent(in) :: rows
+    type(sparse_rows_t), intent(in), optional :: replaced   !< rows replacing those of rows (build_matrix)
+    integer, intent(in), optional :: replaced_rows(:)
+    character(len=200) :: text
+    if (rows%first_row /= solver%first_row .or. rows%last_row /= solver%last_row) then
+      write(text, '(a,i0,a,i0,a,i0,a,i0,a)') 'linear_solver_replace_matrix: rows ', rows%first_row, ' .. ', &
+          rows%last_row, ' instead of the solver''s ', solver%first_row, ' .. ', solver%last_row, '; create a new solver'
+      call fatal(trim(text), collective=.false.)
+    end if
+    call build_matrix(solver, rows, replaced, replaced_rows)
+    if (solver%config%preconditioner == 'boomeramg' .or. solver%config%preconditioner == 'ilu') then
+      call destroy_krylov(solver)
+      call make_krylov(solver)
+    end if
+    solver%set_up = .false.
+  end subroutine linear_solver_replace_matrix
 
   !> Solve A solution = rhs on this rank's rows (collective). solution holds the initial guess on
   !> entry (e.g. the previous time level). The first solve after create or update_values also
@@ -252,15 +277,15 @@ contains
   subroutine linear_solver_destroy(solver)
     type(linear_solver_t), intent(inout) :: solver
     call destroy_krylov(solver)
-    if (c_associated(solver%ij_matrix)) call require_ok(HYPRE_IJMatrixDestroy(solver%ij_matrix), 'HYPRE_IJMatrixDestroy')
+    if (c_associated(solver%matrix)) call require_ok(HYPRE_ParCSRMatrixDestroy(solver%matrix), &
+                                                     'HYPRE_ParCSRMatrixDestroy')
     if (c_associated(solver%ij_rhs)) call require_ok(HYPRE_IJVectorDestroy(solver%ij_rhs), 'HYPRE_IJVectorDestroy')
     if (c_associated(solver%ij_solution)) call require_ok(HYPRE_IJVectorDestroy(solver%ij_solution), &
                                                           'HYPRE_IJVectorDestroy')
-    solver%ij_matrix = c_null_ptr; solver%matrix = c_null_ptr
+    solver%matrix = c_null_ptr
     solver%ij_rhs = c_null_ptr; solver%rhs = c_null_ptr; solver%ij_solution = c_null_ptr; solver%solution = c_null_ptr
     solver%rhs_local => null(); solver%solution_local => null()
     if (associated(solver%handle)) deallocate(solver%handle)
-    if (allocated(solver%row_numbers)) deallocate(solver%row_numbers, solver%entries_per_row, solver%columns)
   end subroutine linear_solver_destroy
 
   !> One line for the log: method, iterations, residual and, if it did not converge, the advice.
@@ -304,17 +329,40 @@ contains
     end if
   end subroutine check_config
 
-  !> (Re-)initialise the IJ matrix, set every entry of this rank's rows, assemble.
-  subroutine set_matrix_values(solver, rows)
+  !> The ParCSR matrix of this rank's rows (collective), replacing the solver's if it has one.
+  !> replaced_rows (ascending local rows) take their entries from replaced (compact CSR: those of
+  !> the s-th are replaced%row_start(s) .. replaced%row_start(s + 1) - 1) instead of from rows.
+  !> The arrays go to C as they are (default integer and real(wp) are c_int and c_double).
+  subroutine build_matrix(solver, rows, replaced, replaced_rows)
     type(linear_solver_t), intent(inout) :: solver
     type(sparse_rows_t), intent(in) :: rows
-    call require_ok(HYPRE_IJMatrixInitialize(solver%ij_matrix), 'HYPRE_IJMatrixInitialize')
-    call require_ok(HYPRE_IJMatrixSetValues(solver%ij_matrix, int(size(solver%row_numbers), c_int), &
-                    solver%entries_per_row, solver%row_numbers, solver%columns, &
-                    real(rows%values(1:solver%n_entries), c_double)), 'HYPRE_IJMatrixSetValues')
-    call require_ok(HYPRE_IJMatrixAssemble(solver%ij_matrix), 'HYPRE_IJMatrixAssemble')
-    call require_ok(HYPRE_IJMatrixGetObject(solver%ij_matrix, solver%matrix), 'HYPRE_IJMatrixGetObject')
-  end subroutine set_matrix_values
+    type(sparse_rows_t), intent(in), optional :: replaced
+    integer, intent(in), optional :: replaced_rows(:)
+    integer, parameter :: none(1) = 0
+    real(wp), parameter :: no_values(1) = 0
+    integer :: n_entries, s
+    integer(c_int) :: ierr
+    call timer_tic(solver%timer_matrix)
+    if (c_associated(solver%matrix)) call require_ok(HYPRE_ParCSRMatrixDestroy(solver%matrix), &
+                                                     'HYPRE_ParCSRMatrixDestroy')
+    n_entries = rows%row_start(rows_local_count(rows) + 1) - 1
+    if (present(replaced) .and. present(replaced_rows)) then
+      n_entries = n_entries + replaced%row_start(size(replaced_rows) + 1) - 1
+      do s = 1, size(replaced_rows)
+        n_entries = n_entries - (rows%row_start(replaced_rows(s) + 1) - rows%row_start(replaced_rows(s)))
+      end do
+      ierr = agglo_hypre_parcsr_create(solver%communicator, rows%first_row, rows%last_row, solver%global_rows, &
+                                       rows%row_start, rows%columns, rows%values, size(replaced_rows), replaced_rows, &
+                                       replaced%row_start, replaced%columns, replaced%values, solver%matrix)
+    else
+      ierr = agglo_hypre_parcsr_create(solver%communicator, rows%first_row, rows%last_row, solver%global_rows, &
+                                       rows%row_start, rows%columns, rows%values, 0, none, none, none, no_values, &
+                                       solver%matrix)
+    end if
+    call require_ok(ierr, 'agglo_hypre_parcsr_create')
+    solver%n_entries = n_entries
+    call timer_toc(solver%timer_matrix)
+  end subroutine build_matrix
 
   !> An assembled ParCSR vector on this rank's rows and a Fortran view of its local entries.
   subroutine make_vector(solver, ij_vector, vector, local)

@@ -14,9 +14,14 @@
 !> The system is non-symmetric (the ghost rows); it is solved per component with a hypre Krylov
 !> method (hypre_solver), by default BiCGSTAB preconditioned by the FFT Helmholtz solve with a
 !> Jacobi correction on the replaced rows (hypre_fft_preconditioner), chosen by measurement
-!> (docs/studies/performance.md, "Crank-Nicolson with the immersed boundary"). The matrices are built
-!> when the nodes are classified again (bodies moved) and their values replaced when alpha
-!> changes (a new dt); the right-hand side every step.
+!> (docs/studies/performance.md, "Crank-Nicolson with the immersed boundary"). The right-hand side
+!> is set every step. After a classification (bodies moved) only the body rows are assembled again
+!> and compared with the last matrix's: when every ghost and interior node kept its status and
+!> every ghost row its stencil nodes (a sub-cell move), their new values are written into the
+!> matrix in place (the fluid rows, (I - alpha L_h), have not changed); otherwise the matrix of the
+!> new pattern is built (full_builds counts these, per component), in one pass over the Helmholtz
+!> rows with the body rows in their place; a new alpha (a new dt) builds it again likewise. The
+!> Krylov solver and its vectors are set up once per component and kept across steps and matrices.
 !>
 !> Loads: the momentum the body rows add is what the momentum-balance loads of immersed_loads
 !> need. Summed over the periodic box, sum (I - alpha L_h) u = sum u, so the system adds to the
@@ -35,10 +40,14 @@ module immersed_predictor
   use halo_exchange, only: exchange_slab_halos
   use poisson_fft, only: poisson_fft_t, poisson_create
   use predictor_solver, only: predictor_solver_t, apply_predictor_operator
+  use timer_registry, only: timer_register
   use hypre_solver, only: sparse_rows_t, linear_solver_config_t, linear_solver_t, solve_status_t, &
-                          linear_solver_create, linear_solver_update_values, linear_solver_solve, rows_local_count
-  use hypre_helmholtz_rows, only: global_row, helmholtz_rows_create, field_to_rows, rows_to_field
+                          linear_solver_create, linear_solver_update_values, linear_solver_replace_matrix, &
+                          linear_solver_solve, linear_solver_destroy, rows_local_count
+  use hypre_helmholtz_rows, only: global_row, helmholtz_rows_create, helmholtz_rows_set_coefficient, field_to_rows, &
+                                  rows_to_field
   use hypre_fft_preconditioner, only: fft_helmholtz_preconditioner_t, fft_preconditioner_create
+  use immersed_geometry, only: ghost_node_t
   use immersed_boundary, only: immersed_boundary_t, imposition_report_t, rigid_velocity, ghost_surface_value
   use immersed_loads, only: account
   implicit none
@@ -50,8 +59,12 @@ module immersed_predictor
 
   !> The system of one velocity component.
   type :: component_system_t
-    type(sparse_rows_t) :: rows
+    !> The ghost and interior rows of the matrix, in ascending local row order, in compact CSR form
+    !> (the entries of local row body_rows(s) are body%row_start(s) .. body%row_start(s + 1) - 1).
+    integer, allocatable :: body_rows(:)
+    type(sparse_rows_t) :: body
     type(linear_solver_t) :: solver
+    logical :: created = .false.                              !< solver holds a matrix
     type(fft_helmholtz_preconditioner_t), pointer :: preconditioner => null()   !< heap: hypre keeps its address
     integer, allocatable :: ghost_rows(:), interior_rows(:)   !< local rows of the ghost and interior nodes
     real(wp), allocatable :: rhs(:), solution(:)              !< this rank's rows
@@ -65,6 +78,7 @@ module immersed_predictor
     type(immersed_boundary_t), pointer :: ibm => null()
     type(linear_solver_config_t) :: config
     type(component_system_t) :: system(3)
+    type(sparse_rows_t) :: helmholtz                  !< (I - alpha L_h) on every row, for the current alpha
     type(fluid_grid_t), pointer :: grid => null()     !< a copy of the fluid grid (heap) for the preconditioner
     type(poisson_fft_t), pointer :: fft => null()     !< the preconditioner's own FFT (heap)
     real(wp), allocatable :: work(:, :, :)            !< (I - alpha L_h) u* for the loads
@@ -77,6 +91,7 @@ module immersed_predictor
     real(wp) :: build_seconds = 0, solve_seconds = 0  !< wall time of building and solving, summed
     integer :: builds = 0                             !< matrices built (after a classification)
     integer :: updates = 0                            !< of those (per component), values only (same structure)
+    integer :: full_builds = 0                        !< component matrices built with a new pattern
   contains
     procedure :: solve => immersed_predictor_solve
   end type immersed_predictor_t
@@ -102,11 +117,18 @@ contains
     type(linear_solver_config_t), intent(in) :: config
     integer :: c
     predictor%config = config
+    ! The breakdown's order: the solves, the preconditioner within them, then the matrices.
+    c = timer_register('hypre')
+    c = timer_register('  FFT preconditioner')
+    c = timer_register('hypre matrices')
     if (.not. associated(predictor%grid)) allocate(predictor%grid, predictor%fft)
     predictor%grid = grid
     call poisson_create(predictor%fft, predictor%grid, 'estimate')
     call allocate_field(grid, predictor%work)
     do c = 1, 3
+      if (predictor%system(c)%created) call linear_solver_destroy(predictor%system(c)%solver)
+      predictor%system(c)%created = .false.
+      if (allocated(predictor%system(c)%rhs)) deallocate(predictor%system(c)%rhs, predictor%system(c)%solution)
       if (allocated(predictor%system(c)%guess)) deallocate(predictor%system(c)%guess)
       allocate(predictor%system(c)%guess(grid%nx * grid%ny * grid%nz_local))
     end do
@@ -149,6 +171,13 @@ contains
     if (.not. associated(self%ibm)) call fatal('immersed predictor: no immersed boundary given')
     if (.not. (alpha > 0.0_wp)) call fatal('immersed predictor: needs the Crank-Nicolson predictor (alpha > 0)')
     t0 = wall_time()
+    if (alpha /= self%alpha) then
+      if (allocated(self%helmholtz%row_start)) then
+        call helmholtz_rows_set_coefficient(grid, alpha, self%helmholtz)
+      else
+        call helmholtz_rows_create(grid, alpha, self%helmholtz)
+      end if
+    end if
     if (self%stale) then
       do c = 1, 3
         call build_system(self, grid, c, alpha)
@@ -156,7 +185,7 @@ contains
       self%builds = self%builds + 1
     else if (alpha /= self%alpha) then
       do c = 1, 3
-        call helmholtz_values(self, grid, c, alpha)
+        call helmholtz_values(self, c, alpha)
       end do
     end if
     self%alpha = alpha
@@ -180,52 +209,74 @@ contains
   end subroutine immersed_predictor_solve
 
   !> The rows of component c for the current classification, and its hypre solver (collective).
-  !> When the new rows have the old ones' structure (the same ghost and interior nodes, the same
-  !> stencil nodes: a body moved by a fraction of a cell without changing any node's status) only
-  !> the values are replaced; otherwise the solver is created again.
+  !> When the new body rows have the old ones' pattern (the same ghost and interior nodes, the same
+  !> stencil nodes: a body moved by a fraction of a cell without changing any node's status) and
+  !> alpha is the matrix's, only the body rows' values are written into the matrix; otherwise the
+  !> matrix is built from the Helmholtz rows with the body rows in place of theirs (the solver
+  !> created the first time).
   subroutine build_system(self, grid, c, alpha)
     type(immersed_predictor_t), intent(inout) :: self
     type(fluid_grid_t), intent(in) :: grid
     integer, intent(in) :: c
     real(wp), intent(in) :: alpha
-    integer, allocatable :: old_start(:), old_columns(:)
+    integer, allocatable :: old_rows(:), old_start(:), old_columns(:)
     logical :: same_structure
     integer :: g, m
-    if (allocated(self%system(c)%rows%row_start)) then
-      old_start = self%system(c)%rows%row_start
-      old_columns = self%system(c)%rows%columns(1:old_start(size(old_start)) - 1)
-    end if
-    call assemble_rows(self, grid, c, alpha)
-    same_structure = .false.
-    if (allocated(old_start) .and. self%reuse_structure) then
-      associate (rows => self%system(c)%rows)
-        same_structure = size(old_start) == size(rows%row_start)
-        if (same_structure) same_structure = all(old_start == rows%row_start)
-        if (same_structure) same_structure = all(old_columns == rows%columns(1:size(old_columns)))
-      end associate
-    end if
-    ! Every rank must take the same branch (creation and update are collective).
-    same_structure = global_all(same_structure)
+    associate (sys => self%system(c))
+      if (allocated(sys%body_rows)) then
+        call move_alloc(sys%body_rows, old_rows)
+        call move_alloc(sys%body%row_start, old_start)
+        call move_alloc(sys%body%columns, old_columns)
+      end if
+      call assemble_body_rows(self, grid, c)
+      same_structure = .false.
+      if (sys%created .and. allocated(old_rows) .and. self%reuse_structure) then
+        same_structure = size(old_rows) == size(sys%body_rows)
+        if (same_structure) same_structure = all(old_rows == sys%body_rows)
+        if (same_structure) same_structure = all(old_start == sys%body%row_start)
+        if (same_structure) same_structure = all(old_columns == sys%body%columns)
+      end if
+      ! Every rank must take the same branch (building is collective).
+      same_structure = global_all(same_structure)
+    end associate
     associate (sys => self%system(c), nodes => self%ibm%geometry%component(c))
       if (.not. associated(sys%preconditioner)) allocate(sys%preconditioner)
       if (.not. allocated(sys%rhs)) then
         call fft_preconditioner_create(sys%preconditioner, self%grid, self%fft, alpha)
-        allocate(sys%rhs(rows_local_count(sys%rows)), sys%solution(rows_local_count(sys%rows)))
+        allocate(sys%rhs(rows_local_count(self%helmholtz)), sys%solution(rows_local_count(self%helmholtz)))
       end if
       sys%preconditioner%coefficient = alpha
       sys%preconditioner%replaced_rows = [sys%ghost_rows, sys%interior_rows]
-      sys%preconditioner%replaced_diagonal = [(sys%rows%values(sys%rows%row_start(sys%ghost_rows(g))), &
-                                               g = 1, nodes%n_ghost), (1.0_wp, m = 1, nodes%n_interior)]
-      if (same_structure) then
-        call linear_solver_update_values(sys%solver, sys%rows)
+      sys%preconditioner%replaced_diagonal = [(ghost_diagonal(nodes%ghost(g)), g = 1, nodes%n_ghost), &
+                                               (1.0_wp, m = 1, nodes%n_interior)]
+      if (same_structure .and. alpha == self%alpha) then
+        ! The fluid rows keep their values: only the body rows get theirs, in place.
+        call linear_solver_update_values(sys%solver, sys%body, sys%body_rows)
         self%updates = self%updates + 1
-      else if (self%config%preconditioner == 'user') then
-        call linear_solver_create(sys%solver, sys%rows, self%config, sys%preconditioner)
+      else if (.not. sys%created) then
+        if (self%config%preconditioner == 'user') then
+          call linear_solver_create(sys%solver, self%helmholtz, self%config, sys%preconditioner, &
+                                    replaced=sys%body, replaced_rows=sys%body_rows)
+        else
+          call linear_solver_create(sys%solver, self%helmholtz, self%config, replaced=sys%body, &
+                                    replaced_rows=sys%body_rows)
+        end if
+        sys%created = .true.
+        self%full_builds = self%full_builds + 1
       else
-        call linear_solver_create(sys%solver, sys%rows, self%config)
+        ! A new pattern (or a new dt as well: every row has new values, built afresh in one pass).
+        call linear_solver_replace_matrix(sys%solver, self%helmholtz, sys%body, sys%body_rows)
+        self%full_builds = self%full_builds + 1
       end if
     end associate
   end subroutine build_system
+
+  !> The diagonal entry of a ghost row (Eq. 7): 1 + kappa w_G, w_G the weight of G in its own stencil.
+  pure real(wp) function ghost_diagonal(ghost)
+    type(ghost_node_t), intent(in) :: ghost
+    ghost_diagonal = 1.0_wp
+    if (ghost%self_corner > 0) ghost_diagonal = 1.0_wp + ghost%extrapolation * ghost%weight(ghost%self_corner)
+  end function ghost_diagonal
 
   !> True on every rank when flag is true on every rank (collective).
   logical function global_all(flag)
@@ -234,89 +285,79 @@ contains
     call MPI_Allreduce(MPI_IN_PLACE, global_all, 1, MPI_LOGICAL, MPI_LAND, world)
   end function global_all
 
-  !> New Helmholtz values (a new dt) on the same structure (the body rows do not depend on dt).
-  subroutine helmholtz_values(self, grid, c, alpha)
+  !> New Helmholtz values (a new dt) on the same structure (the body rows do not depend on dt):
+  !> the matrix is built again in one pass over the rows (as cheap as writing every value anew).
+  subroutine helmholtz_values(self, c, alpha)
     type(immersed_predictor_t), intent(inout) :: self
-    type(fluid_grid_t), intent(in) :: grid
     integer, intent(in) :: c
     real(wp), intent(in) :: alpha
-    call assemble_rows(self, grid, c, alpha)
     self%system(c)%preconditioner%coefficient = alpha
-    call linear_solver_update_values(self%system(c)%solver, self%system(c)%rows)
+    call linear_solver_replace_matrix(self%system(c)%solver, self%helmholtz, self%system(c)%body, &
+                                      self%system(c)%body_rows)
   end subroutine helmholtz_values
 
-  !> CSR rows of component c: the Helmholtz row of hypre_helmholtz_rows (7 entries) at fluid
-  !> nodes, the ghost row (G, then the stencil's other corners) and the identity row.
-  subroutine assemble_rows(self, grid, c, alpha)
+  !> The body rows of component c (compact CSR, ascending local rows): the ghost row (G, then the
+  !> stencil's other corners) and the identity row of each interior node; and the lists of the
+  !> ghost and interior rows in the classification's order.
+  subroutine assemble_body_rows(self, grid, c)
     type(immersed_predictor_t), intent(inout) :: self
     type(fluid_grid_t), intent(in) :: grid
     integer, intent(in) :: c
-    real(wp), intent(in) :: alpha
-    type(sparse_rows_t) :: helmholtz
-    integer, allocatable :: row_kind(:), in_list(:)
-    integer :: n_local, r, g, m, entry, corner, first
-    integer, parameter :: fluid_row = 0, ghost_row = 1, interior_row = 2
-    real(wp) :: self_weight
+    integer, allocatable :: in_list(:)
+    integer :: n_local, n_body, r, s, g, m, entry, corner
 
-    call helmholtz_rows_create(grid, alpha, helmholtz)
-    n_local = rows_local_count(helmholtz)
-    allocate(row_kind(n_local), in_list(n_local))
-    row_kind = fluid_row
-    in_list = 0
+    n_local = grid%nx * grid%ny * grid%nz_local
     associate (nodes => self%ibm%geometry%component(c), sys => self%system(c))
       if (allocated(sys%ghost_rows)) deallocate(sys%ghost_rows, sys%interior_rows, sys%b_ghost, sys%b_interior)
       allocate(sys%ghost_rows(nodes%n_ghost), sys%interior_rows(nodes%n_interior))
       allocate(sys%b_ghost(nodes%n_ghost), sys%b_interior(nodes%n_interior))
+      ! in_list(r): g > 0 for the g-th ghost, -m for the m-th interior node, 0 for a fluid row.
+      allocate(in_list(n_local), source=0)
       do g = 1, nodes%n_ghost
         sys%ghost_rows(g) = local_row(grid, nodes%ghost(g)%node)
-        row_kind(sys%ghost_rows(g)) = ghost_row
         in_list(sys%ghost_rows(g)) = g
       end do
       do m = 1, nodes%n_interior
         sys%interior_rows(m) = local_row(grid, nodes%interior(:, m))
-        row_kind(sys%interior_rows(m)) = interior_row
-        in_list(sys%interior_rows(m)) = m
+        in_list(sys%interior_rows(m)) = -m
       end do
-
-      sys%rows%first_row = helmholtz%first_row
-      sys%rows%last_row = helmholtz%last_row
-      if (allocated(sys%rows%row_start)) deallocate(sys%rows%row_start, sys%rows%columns, sys%rows%values)
-      allocate(sys%rows%row_start(n_local + 1))
-      allocate(sys%rows%columns(size(helmholtz%columns) + 2 * nodes%n_ghost), &
-               sys%rows%values(size(helmholtz%columns) + 2 * nodes%n_ghost))
+      n_body = nodes%n_ghost + nodes%n_interior
+      sys%body_rows = pack([(r, r = 1, n_local)], in_list /= 0)
+      if (size(sys%body_rows) /= n_body) call fatal('immersed predictor: two ghost or interior records on one '// &
+                                                    'node (the classification owns each node once)', collective=.false.)
+      if (allocated(sys%body%row_start)) deallocate(sys%body%row_start)
+      if (allocated(sys%body%columns)) deallocate(sys%body%columns)
+      if (allocated(sys%body%values)) deallocate(sys%body%values)
+      allocate(sys%body%row_start(n_body + 1), sys%body%columns(9 * nodes%n_ghost + nodes%n_interior), &
+               sys%body%values(9 * nodes%n_ghost + nodes%n_interior))
+      sys%body%first_row = self%helmholtz%first_row
+      sys%body%last_row = self%helmholtz%last_row
       entry = 0
-      do r = 1, n_local
-        sys%rows%row_start(r) = entry + 1
-        select case (row_kind(r))
-        case (fluid_row)
-          first = helmholtz%row_start(r)
-          sys%rows%columns(entry + 1:entry + 7) = helmholtz%columns(first:first + 6)
-          sys%rows%values(entry + 1:entry + 7) = helmholtz%values(first:first + 6)
-          entry = entry + 7
-        case (ghost_row)
+      do s = 1, n_body
+        r = sys%body_rows(s)
+        sys%body%row_start(s) = entry + 1
+        entry = entry + 1
+        sys%body%columns(entry) = self%helmholtz%columns(self%helmholtz%row_start(r))   ! the diagonal
+        if (in_list(r) > 0) then
           associate (ghost => nodes%ghost(in_list(r)))
-            self_weight = 0
-            if (ghost%self_corner > 0) self_weight = ghost%weight(ghost%self_corner)
-            entry = entry + 1
-            sys%rows%columns(entry) = helmholtz%columns(helmholtz%row_start(r))   ! the diagonal, G
-            sys%rows%values(entry) = 1.0_wp + ghost%extrapolation * self_weight
+            sys%body%values(entry) = ghost_diagonal(ghost)
             do corner = 1, 8
               if (corner == ghost%self_corner) cycle
               entry = entry + 1
-              sys%rows%columns(entry) = global_row(grid, ghost%stencil(1, corner), ghost%stencil(2, corner), &
+              sys%body%columns(entry) = global_row(grid, ghost%stencil(1, corner), ghost%stencil(2, corner), &
                                                    ghost%stencil(3, corner))
-              sys%rows%values(entry) = ghost%extrapolation * ghost%weight(corner)
+              sys%body%values(entry) = ghost%extrapolation * ghost%weight(corner)
             end do
           end associate
-        case default
-          entry = entry + 1
-          sys%rows%columns(entry) = helmholtz%columns(helmholtz%row_start(r))
-          sys%rows%values(entry) = 1.0_wp
-        end select
+        else
+          sys%body%values(entry) = 1.0_wp
+        end if
       end do
-      sys%rows%row_start(n_local + 1) = entry + 1
+      sys%body%row_start(n_body + 1) = entry + 1
+      sys%body%columns = sys%body%columns(1:entry)
+      sys%body%values = sys%body%values(1:entry)
     end associate
-  end subroutine assemble_rows
+  end subroutine assemble_body_rows
 
   !> Solve component c: b from field, the body rows' right-hand sides, the Krylov solve from the
   !> first guess; u* back into field (interior). Stops the run if it does not converge.

@@ -25,7 +25,7 @@ module poisson_fft
   implicit none
   private
   public :: poisson_fft_t, poisson_create, poisson_destroy, poisson_solve, poisson_solve_in_buffer, &
-            helmholtz_solve, spectral_filter, fft_round_trip, spectral_weight, forward
+            helmholtz_solve, helmholtz_solve_in_buffer, spectral_filter, fft_round_trip, spectral_weight, forward
 
   !> A weight as a function of the physical wavenumber magnitude |k| (1/m), for spectral_filter.
   abstract interface
@@ -200,9 +200,29 @@ contains
     type(poisson_fft_t), intent(inout) :: solver
     real(wp), intent(inout) :: field(0:, 0:, 0:)
     real(wp), intent(in) :: coefficient
+    call forward(solver, field)
+    call helmholtz_divide(solver, coefficient)
+    call inverse(solver, field)
+  end subroutine helmholtz_solve
+
+  !> The same solve in the solver's own buffer, for callers that hold the right-hand side in
+  !> another layout (the hypre preconditioner's rows): on entry real_view(1:nx, 1:ny, 1:nz_local)
+  !> holds it, on exit the solution times nx ny nz (FFTW is unnormalised): the caller multiplies
+  !> by solver%normalisation as it copies the solution out, exactly as helmholtz_solve does.
+  subroutine helmholtz_solve_in_buffer(solver, coefficient)
+    type(poisson_fft_t), intent(inout) :: solver
+    real(wp), intent(in) :: coefficient
+    call fftw_mpi_execute_dft_r2c(solver%forward_plan, solver%real_view, solver%spectral_view)
+    call helmholtz_divide(solver, coefficient)
+    call fftw_mpi_execute_dft_c2r(solver%inverse_plan, solver%spectral_view, solver%real_view)
+  end subroutine helmholtz_solve_in_buffer
+
+  !> Divide every Fourier mode of spectral_view by 1 + coefficient (kx~^2 + ky~^2 + kz~^2).
+  subroutine helmholtz_divide(solver, coefficient)
+    type(poisson_fft_t), intent(inout) :: solver
+    real(wp), intent(in) :: coefficient
     integer :: i, j, k
     real(wp) :: eigen_yz
-    call forward(solver, field)
     do j = 1, solver%ny_local
       do k = 1, solver%nz
         eigen_yz = solver%eigen_y(j) + solver%eigen_z(k)
@@ -212,8 +232,7 @@ contains
         end do
       end do
     end do
-    call inverse(solver, field)
-  end subroutine helmholtz_solve
+  end subroutine helmholtz_divide
 
   !> Multiply every Fourier mode of a field (interior) by weight(|k|), |k| the physical wavenumber.
   subroutine spectral_filter(solver, field, weight)

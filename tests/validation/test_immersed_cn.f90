@@ -15,7 +15,11 @@
 !> - a new dt on fixed bodies (only the Helmholtz values replaced in the hypre matrices) gives the
 !>   loads of matrices built afresh for that dt, to 1e-9 (both solves to 1e-12);
 !> - a slowly moving sphere: the rows that keep their structure get new values only, with the
-!>   loads of solvers created afresh every step, to 1e-9.
+!>   loads of solvers created afresh every step, to 1e-9;
+!> - a sphere creeping 1e-6 cells per step (no node changes status, no stencil changes): no
+!>   component matrix is built again after the first step, only values are written; then a jump of
+!>   half a cell (nodes change status): the matrices of the new pattern are built.
+! checks: 24
 program test_immersed_cn
   use agglo_kinds, only: wp
   use parallel_env, only: parallel_start, global_sum
@@ -67,6 +71,7 @@ program test_immersed_cn
   call check_momentum_budget()
   call check_new_dt_same_as_rebuild()
   call check_slow_body_same_as_creation()
+  call check_values_only_without_status_change()
   call test_finish()
 
 contains
@@ -293,6 +298,75 @@ contains
     call check_below(worst, 1.0e-9_wp, 'slow_body_values_update_like_creation')
     call check(scene(1)%predictor%updates > 0 .and. scene(2)%predictor%updates == 0, 'slow_body_reuses_structure')
   end subroutine check_slow_body_same_as_creation
+
+  !> The predictor builds a component matrix only when the body rows' pattern changed (a node
+  !> changed status or a ghost row its stencil cell, as seen from the classification itself):
+  !> 5 steps of a sphere creeping 1e-6 cells per step, then a step after a jump of half a cell.
+  subroutine check_values_only_without_status_change()
+    type(fluid_solver_t) :: solver(2)
+    type(immersed_scene_t) :: scene(2)
+    integer, allocatable :: before(:, :), after(:, :)
+    integer :: step, builds, updates, unchanged_steps, wrong_steps
+    real(wp) :: dx
+    call twin_sphere_scenes(solver, scene, [1.0e-6_wp, 0.0_wp, 0.0_wp])
+    dx = solver(1)%grid%dx
+    call immersed_step(scene(1), solver(1), dx**2 / solver(1)%viscosity)
+    call pattern_codes(scene(1), solver(1), before)
+    unchanged_steps = 0
+    wrong_steps = 0
+    do step = 2, 6
+      builds = scene(1)%predictor%full_builds
+      updates = scene(1)%predictor%updates
+      call immersed_step(scene(1), solver(1), dx**2 / solver(1)%viscosity)
+      call pattern_codes(scene(1), solver(1), after)
+      if (all(after == before)) then
+        unchanged_steps = unchanged_steps + 1
+        if (scene(1)%predictor%full_builds /= builds .or. scene(1)%predictor%updates /= updates + 3) &
+            wrong_steps = wrong_steps + 1
+      end if
+      call move_alloc(after, before)
+    end do
+    print '(a,i0,a,i0,a,i0,a)', 'creeping sphere: ', unchanged_steps, ' of 5 steps without a pattern change, ', &
+        scene(1)%predictor%full_builds, ' component matrices built, ', scene(1)%predictor%updates, ' values only'
+    call check(unchanged_steps == 5, 'creeping_sphere_changes_no_node_status')
+    call check(wrong_steps == 0 .and. scene(1)%predictor%full_builds == 3, 'values_only_steps_build_no_matrix')
+    builds = scene(1)%predictor%full_builds
+    scene(1)%motion(1)%centre = scene(1)%motion(1)%centre + [0.5_wp, 0.3_wp, 0.0_wp] * dx
+    call immersed_step(scene(1), solver(1), dx**2 / solver(1)%viscosity)
+    call pattern_codes(scene(1), solver(1), after)
+    print '(a,i0,a)', 'after a jump of half a cell: ', scene(1)%predictor%full_builds - builds, ' component matrices built'
+    call check(any(after /= before) .and. scene(1)%predictor%full_builds == builds + 3, &
+               'status_change_builds_the_matrices')
+  end subroutine check_values_only_without_status_change
+
+  !> One code per node and component (one rank: local = global planes): 0 fluid, -1 interior,
+  !> for a ghost 1 + the global row of its stencil's first corner (the cell of its image point).
+  subroutine pattern_codes(scene, solver, codes)
+    type(immersed_scene_t), intent(in) :: scene
+    type(fluid_solver_t), intent(in) :: solver
+    integer, allocatable, intent(out) :: codes(:, :)
+    integer :: c, g, m, n(3)
+    n = [solver%grid%nx, solver%grid%ny, solver%grid%nz_local]
+    allocate(codes(product(n), 3), source=0)
+    do c = 1, 3
+      associate (nodes => scene%ibm%geometry%component(c))
+        do g = 1, nodes%n_ghost
+          associate (ghost => nodes%ghost(g))
+            codes(node_row(n, ghost%node), c) = 1 + node_row(n, ghost%stencil(:, 1))
+          end associate
+        end do
+        do m = 1, nodes%n_interior
+          codes(node_row(n, nodes%interior(:, m)), c) = -1
+        end do
+      end associate
+    end do
+  end subroutine pattern_codes
+
+  !> Row of node (i, j, k) among n(1) x n(2) x n(3) nodes, x fastest.
+  pure integer function node_row(n, node)
+    integer, intent(in) :: n(3), node(3)
+    node_row = node(1) + n(1) * ((node(2) - 1) + n(2) * (node(3) - 1))
+  end function node_row
 
   !> Total fluid momentum rho dV sum u of the box (kg m/s), every node of every component.
   function box_momentum(solver) result(p)

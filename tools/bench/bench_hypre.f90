@@ -8,11 +8,11 @@
 !>
 !> Usage: mpirun -np R bench_hypre N            one line per r x method x preconditioner:
 !>   N R r method preconditioner iterations assemble_ms first_solve_ms solve_ms update_ms residual
-!>   assemble: IJ matrix create + set values + assemble and the Krylov objects;
+!>   assemble: the ParCSR matrix built from the rows, the vectors and the Krylov objects;
 !>   first_solve: preconditioner setup + solve; solve: a second solve, new b, setup reused (the
 !>   fastest of 3: the machine may be shared);
-!>   update: new values on the assembled matrix (IJ re-initialise + set + assemble) + new Krylov
-!>   objects. Times are the slowest rank's.
+!>   update: new values of every row written into the matrix (with BoomerAMG and ILU new Krylov
+!>   objects as well). Times are the slowest rank's.
 !>        mpirun -np R bench_hypre N sphere        the same with a sphere of diameter L/4 (16 cells
 !>   at 64^3) in the box: its ghost nodes' rows are the pure-mirror rows (1 + w_G) x_G +
 !>   sum_{j /= G} w_j x_j = b_G (trilinear weights at M = 2B - G), its interior nodes' rows x = b.
