@@ -38,16 +38,18 @@ module particle_system
   use spheroid, only: spheroid_t
   use rigid_body, only: rigid_body_t, added_inertia_t, rigid_body_step, kinetic_energy
   use closest_points, only: closest_points_t, find_closest_points
-  use dlvo, only: dlvo_model_t, dlvo_evaluation_t, dlvo_evaluate
+  use dlvo, only: dlvo_model_t, dlvo_evaluation_t, dlvo_evaluate, dlvo_cutoff_gap
   use collision, only: collision_model_t, collision_result_t, collision_detected, collide
   use lubrication, only: lubrication_model_t, lubrication_result_t, lubricate
   use vector_algebra, only: cross
   use periodic_box, only: image_shift
+  use broad_phase, only: broad_phase_t, broad_phase_find, near_pair
   implicit none
   private
   public :: particle_models_t, particle_pair_t, particle_loads_t, particle_system_t, particle_system_create, &
             particle_system_interact, particle_system_step, particle_loads_zero, &
             unwrapped_position, pair_image, pair_body_image, particle_system_energy, particle_system_set_added_inertia
+  public :: particle_interaction_gap, bounding_radius
 
   !> The pair models and how the bodies move; set up once by the scene.
   type :: particle_models_t
@@ -87,7 +89,13 @@ module particle_system
     integer(i8), allocatable :: wraps(:,:)               !< (3, n): net box crossings, for unwrapped positions
     real(wp) :: box_length(3) = 0.0_wp                   !< m, period per direction; 0 = unbounded
     type(particle_models_t) :: models
-    type(particle_pair_t), allocatable :: pairs(:)       !< (n (n - 1) / 2), in the order of the sweep
+    !> The pair records, sorted by (first, second): the order of the sweep. Without a box every pair
+    !> i < j (n (n - 1) / 2); with a box the near pairs of the broad phase (near_pairs_only).
+    type(particle_pair_t), allocatable :: pairs(:)
+    logical :: near_pairs_only = .false.                 !< periodic: pair records only for the near pairs
+    real(wp), allocatable :: bounding_radii(:)           !< (n) m, max(a, b): the bodies' bounding spheres
+    real(wp) :: search_gap = huge(1.0_wp)                !< m, the broad phase's gap of the last interaction
+    type(broad_phase_t) :: finder                        !< cell list of the broad phase (its arrays reused)
     type(particle_loads_t) :: dlvo_loads                 !< summed over pairs, current state
     type(particle_loads_t) :: collision_loads            !< impulse / dt of the last interaction (outputs)
     type(particle_loads_t) :: lubrication_loads          !< lubrication impulse / dt of the last interaction
@@ -113,8 +121,11 @@ contains
 
   !> A system of the given shapes and bodies (same order). box_length: periods (0 = unbounded in
   !> that direction; absent = unbounded). contacts: closest points already known for the pairs in
-  !> the order of the pair list (e.g. from a placement), taken as current. The system is not yet
-  !> interacted: call particle_system_interact once before the first step.
+  !> the order of the full pair list (1,2), (1,3), ..., (N-1,N) (e.g. from a placement), taken as
+  !> current. Without a box every pair has a record; with one (periodic in some direction), only the
+  !> pairs the broad phase finds within the search gap (the interaction gap; a many-body scene sets
+  !> it to particle_interaction_gap(models), the DLVO cut-off; huge(): every pair). The system is not
+  !> yet interacted: call particle_system_interact once before the first step.
   subroutine particle_system_create(system, shapes, bodies, models, box_length, contacts)
     type(particle_system_t), intent(out) :: system
     type(spheroid_t), intent(in) :: shapes(:)
@@ -122,10 +133,11 @@ contains
     type(particle_models_t), intent(in) :: models
     real(wp), intent(in), optional :: box_length(3)
     type(closest_points_t), intent(in), optional :: contacts(:)
-    integer :: i, j, p
+    integer :: i, j, p, n
     if (size(shapes) /= size(bodies) .or. size(bodies) < 1) &
       call fatal('particle_system_create: one shape per body and at least one body are required')
     system%n = size(bodies)
+    n = system%n
     system%shapes = shapes
     system%bodies = bodies
     system%models = models
@@ -133,30 +145,64 @@ contains
       if (any(box_length < 0.0_wp)) call fatal('particle_system_create: box lengths must be >= 0 (0 = unbounded)')
       system%box_length = box_length
     end if
-    allocate(system%wraps(3, system%n))
+    allocate(system%bounding_radii(n))
+    do i = 1, n
+      system%bounding_radii(i) = bounding_radius(shapes(i))
+    end do
+    system%near_pairs_only = any(system%box_length > 0.0_wp)
+    allocate(system%wraps(3, n))
     system%wraps = 0_i8
     call wrap_positions(system)
-    allocate(system%pairs(system%n * (system%n - 1) / 2))
-    p = 0
-    do i = 1, system%n - 1
-      do j = i + 1, system%n
-        p = p + 1
-        system%pairs(p)%first = i
-        system%pairs(p)%second = j
+    if (system%near_pairs_only) then
+      call find_near_pairs(system, system%models%interaction_gap)
+      allocate(system%pairs(system%finder%count))
+      do p = 1, system%finder%count
+        system%pairs(p)%first = system%finder%first(p)
+        system%pairs(p)%second = system%finder%second(p)
       end do
-    end do
-    if (present(contacts)) then
-      if (size(contacts) /= size(system%pairs)) call fatal('particle_system_create: one contact per pair is required')
-      do p = 1, size(system%pairs)
-        system%pairs(p)%contact = contacts(p)
-        system%pairs(p)%active = contacts(p)%converged
+    else
+      allocate(system%pairs(n * (n - 1) / 2))
+      p = 0
+      do i = 1, n - 1
+        do j = i + 1, n
+          p = p + 1
+          system%pairs(p)%first = i
+          system%pairs(p)%second = j
+        end do
       end do
     end if
-    system%dlvo_loads = particle_loads_zero(system%n)
-    system%collision_loads = particle_loads_zero(system%n)
-    system%lubrication_loads = particle_loads_zero(system%n)
-    allocate(system%impulse_added(system%n))
+    if (present(contacts)) then
+      if (size(contacts) /= n * (n - 1) / 2) call fatal('particle_system_create: one contact per pair is required')
+      do p = 1, size(system%pairs)
+        ! Position of (i, j) in the full list: the pairs of the bodies before i, then j - i.
+        i = system%pairs(p)%first
+        j = system%pairs(p)%second
+        system%pairs(p)%contact = contacts((i - 1) * (2 * n - i) / 2 + j - i)
+        system%pairs(p)%active = system%pairs(p)%contact%converged
+      end do
+    end if
+    system%dlvo_loads = particle_loads_zero(n)
+    system%collision_loads = particle_loads_zero(n)
+    system%lubrication_loads = particle_loads_zero(n)
+    allocate(system%impulse_added(n))
   end subroutine particle_system_create
+
+  !> Radius (m) of a spheroid's bounding sphere: its larger semi-axis.
+  pure real(wp) function bounding_radius(shape)
+    type(spheroid_t), intent(in) :: shape
+    bounding_radius = max(shape%a, shape%b)
+  end function bounding_radius
+
+  !> The interaction gap (m, between bounding spheres) of a many-body system: the DLVO cut-off
+  !> (dlvo_cutoff_gap: both terms below dlvo_cutoff_fraction of their contact values), and at least
+  !> the lubrication hand-over gap h_out (the sub-grid force acts below it); 0 without either model
+  !> (collisions widen the broad phase's gap by their own detection reach every step).
+  pure real(wp) function particle_interaction_gap(models)
+    type(particle_models_t), intent(in) :: models
+    particle_interaction_gap = 0.0_wp
+    if (models%dlvo) particle_interaction_gap = dlvo_cutoff_gap(models%dlvo_model)
+    if (models%lubrication) particle_interaction_gap = max(particle_interaction_gap, models%lubrication_model%outer_gap)
+  end function particle_interaction_gap
 
   !> The added masses the bodies' contact and lubrication impulses carry from now on (one per body,
   !> body frame): those with which the coupling moves the bodies under their loads, so that an
@@ -205,14 +251,18 @@ contains
     call particle_system_interact(system, dt)
   end subroutine particle_system_step
 
-  !> The pair interactions of the current state (steps 2-4 of the module header): closest points of
-  !> the pairs that may interact (not recomputed where already current), collision impulses in the
-  !> order of the pair list, DLVO loads. dt scales the collision detection distance (v_n dt) and
-  !> the reported collision force (impulse / dt).
+  !> The pair interactions of the current state (steps 2-4 of the module header): with a box, the
+  !> near pairs of the broad phase first (records of pairs still near kept, with their warm starts);
+  !> closest points of the pairs that may interact (not recomputed where already current), collision
+  !> impulses in the order of the pair list, DLVO loads. dt scales the collision detection distance
+  !> (v_n dt) and the reported collision force (impulse / dt).
   subroutine particle_system_interact(system, dt)
     type(particle_system_t), intent(inout) :: system
     real(wp), intent(in) :: dt
     integer :: p
+    system%search_gap = system%models%interaction_gap
+    if (system%models%collisions) system%search_gap = max(system%search_gap, collision_reach(system, dt))
+    if (system%near_pairs_only) call refresh_pairs(system)
     do p = 1, size(system%pairs)
       call update_contact(system, system%pairs(p))
     end do
@@ -233,21 +283,81 @@ contains
     end do
   end subroutine particle_system_interact
 
+  !> Gap (m) between bounding spheres within which a collision can be detected this step: the
+  !> detection distance max(floor, factor v_n dt) at the largest approach speed two bodies can
+  !> have, v_n <= s_i + s_j with s = |U| + |omega| max(a, b) (the fastest surface point).
+  real(wp) function collision_reach(system, dt)
+    type(particle_system_t), intent(in) :: system
+    real(wp), intent(in) :: dt
+    real(wp) :: fastest
+    integer :: i
+    fastest = 0.0_wp
+    do i = 1, system%n
+      fastest = max(fastest, norm2(system%bodies(i)%velocity) &
+                             + norm2(system%bodies(i)%angular_velocity_body) * system%bounding_radii(i))
+    end do
+    collision_reach = max(system%models%collision_model%detection_floor, &
+                          system%models%collision_model%detection_factor * 2.0_wp * fastest * dt)
+  end function collision_reach
+
+  !> The broad phase's near pairs at the current positions (system%finder).
+  subroutine find_near_pairs(system, gap)
+    type(particle_system_t), intent(inout) :: system
+    real(wp), intent(in) :: gap
+    real(wp), allocatable :: positions(:,:)
+    integer :: i
+    allocate(positions(3, system%n))
+    do i = 1, system%n
+      positions(:, i) = system%bodies(i)%position
+    end do
+    call broad_phase_find(system%finder, positions, system%bounding_radii, system%box_length, gap)
+  end subroutine find_near_pairs
+
+  !> Pair records for the near pairs of the current state, sorted by (first, second): a pair that
+  !> was near before keeps its record (closest points: the warm start; flags), a new one starts
+  !> from defaults, a pair no longer near is dropped. Both lists are sorted, so one merge pass.
+  subroutine refresh_pairs(system)
+    type(particle_system_t), intent(inout) :: system
+    type(particle_pair_t), allocatable :: records(:)
+    integer :: p, old, m
+    call find_near_pairs(system, system%search_gap)
+    m = system%finder%count
+    if (m == size(system%pairs)) then
+      if (all(system%pairs%first == system%finder%first(1:m)) .and. &
+          all(system%pairs%second == system%finder%second(1:m))) return   ! the same pairs: nothing to move
+    end if
+    allocate(records(m))
+    old = 1
+    do p = 1, m
+      associate (i => system%finder%first(p), j => system%finder%second(p))
+        do while (old <= size(system%pairs))
+          if (system%pairs(old)%first > i .or. (system%pairs(old)%first == i .and. system%pairs(old)%second >= j)) exit
+          old = old + 1
+        end do
+        if (old <= size(system%pairs)) then
+          if (system%pairs(old)%first == i .and. system%pairs(old)%second == j) records(p) = system%pairs(old)
+        end if
+        records(p)%first = i
+        records(p)%second = j
+      end associate
+    end do
+    call move_alloc(records, system%pairs)
+  end subroutine refresh_pairs
+
   !> Closest points of one pair, warm-started from its last ones; inactive (and its warm start
-  !> dropped) when the bounding spheres are farther apart than the models' interaction gap.
+  !> dropped) when the bounding spheres are farther apart than the broad phase's gap (the models'
+  !> interaction gap, widened by the collision reach).
   subroutine update_contact(system, pair)
     type(particle_system_t), intent(in) :: system
     type(particle_pair_t), intent(inout) :: pair
     type(closest_points_t) :: previous   ! a copy: the result overwrites pair%contact
     type(rigid_body_t) :: first, second
-    real(wp) :: reach
     character(len=40) :: which
     if (pair%active) return
     first = system%bodies(pair%first)
     second = pair_body_image(system, pair)
-    reach = max(system%shapes(pair%first)%a, system%shapes(pair%first)%b) &
-            + max(system%shapes(pair%second)%a, system%shapes(pair%second)%b)
-    if (norm2(second%position - first%position) - reach > system%models%interaction_gap) then
+    if (.not. near_pair(first%position, system%bodies(pair%second)%position, system%bounding_radii(pair%first), &
+                        system%bounding_radii(pair%second), system%box_length, system%search_gap)) then
       pair%contact = closest_points_t()
       return
     end if
@@ -331,6 +441,12 @@ contains
     type(rigid_body_t) :: second
     pair%dlvo = dlvo_evaluation_t()
     if (.not. (system%models%dlvo .and. pair%active)) return
+    ! Within the collision reach but beyond the interaction gap: below the DLVO cut-off.
+    if (system%models%interaction_gap < system%search_gap) then
+      if (.not. near_pair(system%bodies(pair%first)%position, system%bodies(pair%second)%position, &
+                          system%bounding_radii(pair%first), system%bounding_radii(pair%second), system%box_length, &
+                          system%models%interaction_gap)) return
+    end if
     second = pair_body_image(system, pair)
     call dlvo_evaluate(system%models%dlvo_model, system%shapes(pair%first), system%bodies(pair%first), &
                        system%shapes(pair%second), second, pair%contact, pair%dlvo)
