@@ -39,7 +39,8 @@ module particle_system
   use rigid_body, only: rigid_body_t, added_inertia_t, rigid_body_step, kinetic_energy
   use closest_points, only: closest_points_t, find_closest_points
   use dlvo, only: dlvo_model_t, dlvo_evaluation_t, dlvo_evaluate, dlvo_cutoff_gap
-  use collision, only: collision_model_t, collision_result_t, collision_detected, collide
+  use collision, only: collision_model_t, collision_result_t, collision_detected, collide, approach_speed, &
+                       detection_distance, normal_speed_at, normal_correction, regime_frictionless
   use lubrication, only: lubrication_model_t, lubrication_result_t, lubricate
   use vector_algebra, only: cross
   use periodic_box, only: image_shift
@@ -100,6 +101,10 @@ module particle_system
     type(particle_loads_t) :: collision_loads            !< impulse / dt of the last interaction (outputs)
     type(particle_loads_t) :: lubrication_loads          !< lubrication impulse / dt of the last interaction
     integer :: collisions_last = 0                       !< impulses in the last interaction
+    integer :: impulse_sweeps_last = 0                   !< sweeps of the last interaction that applied an impulse
+    integer :: impulse_sweeps_most = 0                   !< the most such sweeps of one interaction since creation
+    integer :: approaching_left = 0                      !< contacts still approaching when the last interaction hit the cap
+    integer(i8) :: sweep_caps_total = 0_i8               !< interactions that hit the cap since creation
     integer(i8) :: collisions_total = 0_i8               !< impulses since creation
     !> (n) the fluid's added masses that collision and lubrication impulses move with each body
     !> (module rigid_body, added_inertia_t): zero (bodies alone) unless a coupling that takes the
@@ -266,12 +271,7 @@ contains
     do p = 1, size(system%pairs)
       call update_contact(system, system%pairs(p))
     end do
-    system%collision_loads%force = 0.0_wp
-    system%collision_loads%torque = 0.0_wp
-    system%collisions_last = 0
-    do p = 1, size(system%pairs)
-      call collide_pair(system, system%pairs(p), dt)
-    end do
+    call resolve_collisions(system, dt)
     system%lubrication_loads = particle_loads_zero(system%n)
     do p = 1, size(system%pairs)
       call lubricate_pair(system, system%pairs(p), dt)
@@ -371,19 +371,215 @@ contains
     pair%active = .true.
   end subroutine update_contact
 
-  !> Collision test and impulse of one pair on the current velocities (the bodies' own copies are
-  !> updated at once, so the next pair in the sweep sees them).
-  subroutine collide_pair(system, pair, dt)
+  !> Collision impulses of the step (docs/theory.md, "Particle system"), in waves. A wave is the set
+  !> of contacts approaching (within their detection distance) when it starts; its contacts are
+  !> swept in the order of the pair list (Gauss-Seidel) until none changes any more: each contact's
+  !> normal impulse of the wave is projected (normal_correction) so that the contact separates at
+  !> its restitution speed s = e v_n (v_n its approach speed at the start of the wave), never
+  !> pulling (the wave's normal impulse >= 0) - the projected Gauss-Seidel of a contact problem with
+  !> a restitution target (Moreau 1988; Catto 2005). The first impulse of a contact whose two bodies
+  !> have received no impulse yet in the step is the pair's impulse of module collision (collide(),
+  !> the pair's closure with its friction rule: exactly the single-pair arithmetic). Then the next
+  !> wave: the contacts the last one has set approaching, until none is. So contacts hit at once
+  !> are solved together (a symmetric hit has a symmetric outcome), and an impact runs down a chain
+  !> contact after contact (Newton's cradle). A contact is re-tested only when one of its bodies has
+  !> received an impulse since it was last tested, and counts as off its target only beyond
+  !> sweep_tolerance times the largest approach speed of the step (the level the sweeps converge
+  !> to). At most max_sweeps sweeps in all; one contact alone is swept once.
+  subroutine resolve_collisions(system, dt)
+    type(particle_system_t), intent(inout) :: system
+    real(wp), intent(in) :: dt
+    real(wp), parameter :: sweep_tolerance = 1.0e-10_wp
+    integer(i8), allocatable :: touched(:), tested(:)
+    real(wp), allocatable :: separation_speed(:), normal_impulse(:)
+    integer, allocatable :: members(:)
+    integer(i8) :: clock
+    integer :: p, q, sweeps, impulses, wave_size, cap
+    real(wp) :: fastest, slowest, speed
+    logical :: applied
+    system%collision_loads%force = 0.0_wp
+    system%collision_loads%torque = 0.0_wp
+    system%collisions_last = 0
+    system%impulse_sweeps_last = 0
+    system%approaching_left = 0
+    do p = 1, size(system%pairs)
+      system%pairs(p)%collided = .false.
+    end do
+    if (.not. system%models%collisions) return
+    allocate(touched(system%n), tested(size(system%pairs)), separation_speed(size(system%pairs)), &
+             normal_impulse(size(system%pairs)), members(size(system%pairs)))
+    touched = 0_i8
+    tested = -1_i8
+    clock = 0_i8
+    fastest = 0.0_wp
+    slowest = 0.0_wp
+    sweeps = 0
+    cap = system%models%collision_model%max_sweeps
+    waves: do
+      ! The wave: the contacts approaching now (only those whose bodies moved since their last test).
+      wave_size = 0
+      do p = 1, size(system%pairs)
+        associate (pair => system%pairs(p))
+          if (max(touched(pair%first), touched(pair%second)) <= tested(p)) cycle
+          tested(p) = clock
+          if (.not. pair%active) cycle
+          if (.not. pair_approaching(system, pair, dt, slowest, fastest)) cycle
+          wave_size = wave_size + 1
+          members(wave_size) = p
+          speed = normal_speed_at(system%bodies(pair%first), pair_body_image(system, pair), pair%contact%point1, &
+                                  pair%contact%point2, pair%contact%normal)
+          separation_speed(p) = system%models%collision_model%restitution * max(speed, 0.0_wp)
+          normal_impulse(p) = 0.0_wp
+          tested(p) = -1_i8            ! swept at least once in the wave
+        end associate
+      end do
+      if (wave_size == 0) exit waves
+      do
+        if (sweeps >= cap) exit waves
+        impulses = 0
+        do q = 1, wave_size
+          p = members(q)
+          associate (pair => system%pairs(p))
+            if (max(touched(pair%first), touched(pair%second)) <= tested(p)) cycle
+            if (touched(pair%first) == 0_i8 .and. touched(pair%second) == 0_i8) then
+              call collide_pair(system, pair, dt, slowest, applied, fastest)
+              if (applied) then
+                separation_speed(p) = pair%collision%restitution_used * pair%collision%normal_velocity_before
+                normal_impulse(p) = dot_product(pair%collision%impulse, pair%collision%normal)
+              end if
+            else
+              call correct_pair(system, pair, dt, slowest, separation_speed(p), normal_impulse(p), applied)
+            end if
+            if (applied) then
+              clock = clock + 1_i8
+              touched(pair%first) = clock
+              touched(pair%second) = clock
+              impulses = impulses + 1
+            end if
+            tested(p) = clock
+          end associate
+        end do
+        if (impulses == 0) exit
+        sweeps = sweeps + 1
+        slowest = sweep_tolerance * fastest
+      end do
+    end do waves
+    system%impulse_sweeps_last = sweeps
+    system%impulse_sweeps_most = max(system%impulse_sweeps_most, sweeps)
+    if (sweeps < cap) return
+    ! The cap was reached: count the contacts still approaching.
+    do p = 1, size(system%pairs)
+      associate (pair => system%pairs(p))
+        if (.not. pair%active) cycle
+        if (pair_approaching(system, pair, dt, slowest)) system%approaching_left = system%approaching_left + 1
+      end associate
+    end do
+    if (system%approaching_left > 0) system%sweep_caps_total = system%sweep_caps_total + 1_i8
+  end subroutine resolve_collisions
+
+  !> One projected Gauss-Seidel update of a contact of the wave (resolve_collisions): applied when
+  !> the contact's normal speed is off its target -separation_speed by more than slowest and the
+  !> wave's normal impulse may move that way (it stays >= 0).
+  subroutine correct_pair(system, pair, dt, slowest, separation_speed, normal_impulse, applied)
     type(particle_system_t), intent(inout) :: system
     type(particle_pair_t), intent(inout) :: pair
-    real(wp), intent(in) :: dt
+    real(wp), intent(in) :: dt, slowest, separation_speed
+    real(wp), intent(inout) :: normal_impulse
+    logical, intent(out) :: applied
+    type(rigid_body_t) :: second
+    real(wp) :: speed, impulse(3), before
+    applied = .false.
+    second = pair_body_image(system, pair)
+    speed = normal_speed_at(system%bodies(pair%first), second, pair%contact%point1, pair%contact%point2, &
+                            pair%contact%normal)
+    if (.not. (speed + separation_speed > slowest .or. &
+               (speed + separation_speed < -slowest .and. normal_impulse > 0.0_wp))) return
+    before = normal_impulse
+    if (system%impulses_in_fluid) then
+      call normal_correction(system%bodies(pair%first), second, pair%contact%point1, pair%contact%point2, &
+                             pair%contact%normal, separation_speed, normal_impulse, impulse, &
+                             system%impulse_added(pair%first), system%impulse_added(pair%second))
+    else
+      call normal_correction(system%bodies(pair%first), second, pair%contact%point1, pair%contact%point2, &
+                             pair%contact%normal, separation_speed, normal_impulse, impulse)
+    end if
+    if (.not. (abs(normal_impulse - before) > 0.0_wp)) return
+    system%bodies(pair%second)%velocity = second%velocity
+    system%bodies(pair%second)%angular_velocity_body = second%angular_velocity_body
+    applied = .true.
+    if (.not. pair%collided) then
+      pair%collision = collision_result_t()
+      pair%collision%contact_point = 0.5_wp * (pair%contact%point1 + pair%contact%point2)
+      pair%collision%normal = pair%contact%normal / norm2(pair%contact%normal)
+      pair%collision%normal_velocity_before = speed
+      pair%collision%regime = regime_frictionless
+      pair%collided = .true.
+      system%collisions_last = system%collisions_last + 1
+      system%collisions_total = system%collisions_total + 1_i8
+    end if
+    pair%collision%impulse = pair%collision%impulse + impulse
+    pair%collision%normal_velocity_after = normal_speed_at(system%bodies(pair%first), second, pair%contact%point1, &
+                                                           pair%contact%point2, pair%contact%normal)
+    if (pair%collision%normal_velocity_before > 0.0_wp) pair%collision%restitution_used = &
+        max(0.0_wp, -pair%collision%normal_velocity_after / pair%collision%normal_velocity_before)
+    call add_impulse_loads(system, pair, impulse, second%position, dt)
+  end subroutine correct_pair
+
+  !> The collision loads of the outputs (impulse / dt, paper Eq. 17) of an impulse on the pair's
+  !> second body (its image at second_position) and the opposite one on the first, at x_c.
+  subroutine add_impulse_loads(system, pair, impulse, second_position, dt)
+    type(particle_system_t), intent(inout) :: system
+    type(particle_pair_t), intent(in) :: pair
+    real(wp), intent(in) :: impulse(3), second_position(3), dt
+    real(wp) :: force(3), point(3)
+    force = impulse / dt
+    point = pair%collision%contact_point
+    associate (loads => system%collision_loads)
+      loads%force(:, pair%first) = loads%force(:, pair%first) - force
+      loads%force(:, pair%second) = loads%force(:, pair%second) + force
+      loads%torque(:, pair%first) = loads%torque(:, pair%first) + cross(point - system%bodies(pair%first)%position, -force)
+      loads%torque(:, pair%second) = loads%torque(:, pair%second) + cross(point - second_position, force)
+    end associate
+  end subroutine add_impulse_loads
+
+  !> The collision test of one pair on the current velocities: approaching faster than slowest and
+  !> within the detection distance (module collision); fastest: raised to the pair's approach speed.
+  logical function pair_approaching(system, pair, dt, slowest, fastest)
+    type(particle_system_t), intent(in) :: system
+    type(particle_pair_t), intent(in) :: pair
+    real(wp), intent(in) :: dt, slowest
+    real(wp), intent(inout), optional :: fastest
+    real(wp) :: speed
+    type(rigid_body_t) :: second
+    second = pair_body_image(system, pair)
+    if (slowest > 0.0_wp) then
+      speed = approach_speed(system%bodies(pair%first), second, pair%contact%point1, pair%contact%point2, &
+                             pair%contact%normal)
+      if (present(fastest)) fastest = max(fastest, speed)
+      pair_approaching = speed > slowest .and. pair%contact%gap < detection_distance(system%models%collision_model, speed, dt)
+    else
+      pair_approaching = collision_detected(system%models%collision_model, system%bodies(pair%first), second, &
+                                            pair%contact, dt)
+      if (present(fastest) .and. pair_approaching) fastest = max(fastest, approach_speed(system%bodies(pair%first), &
+          second, pair%contact%point1, pair%contact%point2, pair%contact%normal))
+    end if
+  end function pair_approaching
+
+  !> Collision test and impulse of one pair on the current velocities (the bodies' own copies are
+  !> updated at once, so the next pair in the sweep sees them); slowest: the smallest approach speed
+  !> that counts (0: any, the single-pass test); fastest: the largest approach speed met so far.
+  subroutine collide_pair(system, pair, dt, slowest, applied, fastest)
+    type(particle_system_t), intent(inout) :: system
+    type(particle_pair_t), intent(inout) :: pair
+    real(wp), intent(in) :: dt, slowest
+    logical, intent(out) :: applied
+    real(wp), intent(inout) :: fastest
     type(rigid_body_t) :: second
     real(wp) :: force(3)
-    pair%collided = .false.
-    if (.not. (system%models%collisions .and. pair%active)) return
+    applied = .false.
+    if (.not. pair%active) return
+    if (.not. pair_approaching(system, pair, dt, slowest, fastest)) return
     second = pair_body_image(system, pair)
-    if (.not. collision_detected(system%models%collision_model, system%bodies(pair%first), second, pair%contact, dt)) &
-      return
     if (system%impulses_in_fluid) then
       call collide(system%models%collision_model, system%bodies(pair%first), second, pair%contact, pair%collision, &
                    system%impulse_added(pair%first), system%impulse_added(pair%second))
@@ -393,6 +589,7 @@ contains
     system%bodies(pair%second)%velocity = second%velocity
     system%bodies(pair%second)%angular_velocity_body = second%angular_velocity_body
     pair%collided = .true.
+    applied = .true.
     system%collisions_last = system%collisions_last + 1
     system%collisions_total = system%collisions_total + 1_i8
     ! The collision force of the outputs: the impulse over dt (paper, Eq. 17) at the contact point.
