@@ -208,7 +208,12 @@ contains
     inside = .true.
     do k = 1, 3
       if (box_length(k) > 0.0_wp) then
-        cell(k) = modulo(cell(k), cells(k))
+        ! Offsets are -1, 0, 1: one period at most (branches, not modulo: this is the inner loop).
+        if (cell(k) < 0) then
+          cell(k) = cell(k) + cells(k)
+        else if (cell(k) >= cells(k)) then
+          cell(k) = cell(k) - cells(k)
+        end if
       else if (cell(k) < 0 .or. cell(k) >= cells(k)) then
         inside = .false.
       end if

@@ -1,14 +1,15 @@
 !> N rigid spheroids, the pairs among them and their one particle step (docs/theory.md, "Particle
 !> system"; docs/design.md, data flow step 6).
 !>
-!> The system owns the bodies (shape, mass, inertia, state), the pairs i < j (closest points kept
+!> The system owns the bodies (shape, mass, inertia, state), the pair records (closest points kept
 !> as the warm start of the next step, the DLVO evaluation, this step's collision) and the loads the
 !> pair interactions put on each body. One step of length dt:
 !>   1. Newton-Euler update of every body under the external loads of the call (frozen over the
 !>      call: Stokes resistance in the pair scenes, resolved hydrodynamic loads later) plus the
 !>      DLVO loads of the current state; positions wrapped into the periodic box, if any;
-!>   2. closest points of every pair that may interact (periodic minimum image), warm-started;
-!>   3. collision test and impulse, pair by pair in the order of the pair list (below);
+!>   2. with a box, the near pairs of the broad phase (module broad_phase) merged with the last
+!>      records; closest points of every pair that may interact (periodic minimum image), warm-started;
+!>   3. collision impulses, swept over the contacts in the order of the records (below);
 !>   4. DLVO at the closest points, summed per body for the next Newton-Euler update.
 !> Steps 2-4 are particle_system_interact, which also prepares a new system (or one read back from
 !> a checkpoint), so that between calls the system is always CURRENT: contacts, collision loads and
@@ -16,13 +17,18 @@
 !> outcome test, a checkpoint or the next fluid step sees. The per-pair work is recomputed every
 !> particle step; nothing pair-related is ever frozen.
 !>
-!> Order of simultaneous impulses: the pairs are visited once per step in the order of the pair list,
-!> (1,2), (1,3), ..., (1,N), (2,3), ..., (N-1,N); each pair is tested with the velocities left by
-!> the impulses before it and its impulse applied at once (one sequential, Gauss-Seidel sweep).
-!> For three spheres in a line, 1 -> 2 -> 3, touching at the same step, the 1-2 impulse comes first
-!> and then the 2-3 test sees the velocity body 2 has just received: the Newton's cradle result.
+!> Pair records, sorted by (i, j): without a box every pair i < j, (1,2), (1,3), ..., (N-1,N); with
+!> a box the pairs whose bounding spheres are within the search gap (models%interaction_gap,
+!> widened by the collision reach), a pair still near keeping its record across steps. With a gap
+!> of huge() both are the full list (the pair scenes: results as they always were). Pairs beyond
+!> the gap skip steps 2-4; the DLVO force acts within models%interaction_gap only.
+!>
+!> Simultaneous impulses (resolve_collisions): in waves of the contacts approaching at the wave's
+!> start, each swept in the order of the records until no contact is off its restitution target
+!> (projected Gauss-Seidel), then the next wave, at most models%collision_model%max_sweeps sweeps.
+!> Three spheres in a line, 1 -> 2 -> 3: the 1-2 impulse, then in the next wave the 2-3 one, the
+!> Newton's cradle result, from either end. A pair alone is swept once (the single-pair arithmetic).
 !> Every impulse conserves linear and angular momentum and, with e = 1 head-on, energy (to round-off).
-!> Pairs whose bounding spheres are farther apart than models%interaction_gap skip steps 2-4.
 !> Optional sub-grid lubrication (module lubrication): after the collisions of step 3, pair by pair
 !> in the same order, an impulse implicit in the pair's normal velocity over dt, applied at once;
 !> its force (impulse / dt) is kept per body in lubrication_loads for the outputs.
