@@ -51,6 +51,8 @@ module particle_system
   use vector_algebra, only: cross
   use periodic_box, only: image_shift
   use broad_phase, only: broad_phase_t, broad_phase_find, near_pair
+  use logger, only: log_line
+  use text_format, only: int_text
   implicit none
   private
   public :: particle_models_t, particle_pair_t, particle_loads_t, particle_system_t, particle_system_create, &
@@ -480,7 +482,13 @@ contains
         if (pair_approaching(system, pair, dt, slowest)) system%approaching_left = system%approaching_left + 1
       end associate
     end do
-    if (system%approaching_left > 0) system%sweep_caps_total = system%sweep_caps_total + 1_i8
+    if (system%approaching_left == 0) return
+    system%sweep_caps_total = system%sweep_caps_total + 1_i8
+    ! Logged the 1st, 10th, 100th, ... time (a long run that keeps hitting the cap says so, not every step).
+    if (system%sweep_caps_total == 10_i8**int(log10(real(system%sweep_caps_total, wp)))) &
+      call log_line('particle system: the impulse sweeps reached &collision max_impulse_sweeps = '// &
+                    int_text(cap)//' with '//int_text(system%approaching_left)//' contact(s) still approaching ('// &
+                    int_text(system%sweep_caps_total)//' step(s) so far)')
   end subroutine resolve_collisions
 
   !> One projected Gauss-Seidel update of a contact of the wave (resolve_collisions): applied when

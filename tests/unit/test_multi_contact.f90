@@ -1,11 +1,12 @@
-! checks: 21
+! checks: 22
 !> Unit tests of the particle system's iterated sequential impulses (several simultaneous contacts,
 !> docs/theory.md "Particle system"): Newton's cradles of five touching equal spheres struck from
 !> either end (e = 1: the far sphere leaves with the striker's velocity, the others at rest; the
 !> reversed cradle needs one sweep per contact), a triangle of three touching spheres struck
 !> symmetrically (a mirror-symmetric outcome), and a tetrahedral cluster of ten touching spheres
 !> struck obliquely by an eleventh (no approaching contact left within the cap; linear and angular
-!> momentum conserved to round-off, energy not gained). Touching: surface gaps of 0.5 nm, below the
+!> momentum conserved to round-off, energy not gained; with the sweeps capped below what it needs, the
+!> contacts left approaching are counted). Touching: surface gaps of 0.5 nm, below the
 !> 1 nm detection floor, so every touching pair is a contact of the same step.
 program test_multi_contact
   use agglo_kinds, only: wp
@@ -121,6 +122,7 @@ contains
     type(spheroid_t) :: sphere
     type(rigid_body_t) :: bodies(n)
     type(particle_system_t) :: system
+    type(particle_models_t) :: models
     real(wp) :: x(3, n), centre(3), direction(3), aim(3), p0(3), l0(3), e0, h
     integer :: i, j, k, b, contacts
     sphere = make_spheroid('sphere', radius, density)
@@ -166,6 +168,14 @@ contains
     call check_below(norm2(total_angular_momentum(system) - l0) / norm2(l0), 1.0e-12_wp, 'cluster_angular_momentum')
     call check_below(particle_system_energy(system) - e0, 1.0e-14_wp * e0, 'cluster_energy_not_gained')
     call check(count([(norm2(system%bodies(b)%velocity) > 1.0e-3_wp * v, b = 1, 10)]) >= 3, 'cluster_struck_spheres_move')
+    ! The same hit with the sweeps capped at 3: contacts left approaching, counted (and logged).
+    models = models_of(0.4_wp)
+    models%collision_model%max_sweeps = 3
+    call particle_system_create(system, spread(sphere, 1, n), bodies, models)
+    call particle_system_interact(system, dt)
+    call check(system%impulse_sweeps_last == 3 .and. system%approaching_left > 0 .and. system%sweep_caps_total == 1 &
+               .and. norm2(total_momentum(system) - p0) / norm2(p0) < 1.0e-12_wp, 'cluster_cap_reached_and_counted', &
+               'contacts left approaching '//trim(int_string(system%approaching_left)))
   end subroutine cluster
 
   !> Largest approach speed (m/s, > 0 approaching) of the pairs whose gap is below the detection
