@@ -4,7 +4,7 @@
 module config_collision
   use agglo_kinds, only: wp
   use deck_file, only: deck_t, check_namelist_read, require_positive, require_nonnegative, require_range, &
-                       require_option
+                       require_option, require_positive_int
   implicit none
   private
   public :: collision_config_t, read_collision_group, check_collision_group, write_collision_group, &
@@ -22,14 +22,17 @@ module config_collision
     !> scheme, set when the deck is parsed (config_reader)
     real(wp) :: lubrication_handover = 0.0_wp
     real(wp) :: lubrication_roughness = 1.0e-9_wp   !< m, h_in: the force saturates below this gap
+    !> cap on the sequential-impulse sweeps of one interaction (several simultaneous contacts)
+    integer :: max_impulse_sweeps = 200
   end type collision_config_t
 
   real(wp) :: restitution, friction_coefficient, detection_floor, detection_factor, lubrication_handover, &
               lubrication_roughness
   character(len=16) :: model
   logical :: lubrication
+  integer :: max_impulse_sweeps
   namelist /collision/ restitution, model, friction_coefficient, detection_floor, detection_factor, lubrication, &
-                       lubrication_handover, lubrication_roughness
+                       lubrication_handover, lubrication_roughness, max_impulse_sweeps
 
 contains
 
@@ -57,6 +60,7 @@ contains
     detection_floor = cfg%detection_floor; detection_factor = cfg%detection_factor
     lubrication = cfg%lubrication; lubrication_handover = cfg%lubrication_handover
     lubrication_roughness = cfg%lubrication_roughness
+    max_impulse_sweeps = cfg%max_impulse_sweeps
   end subroutine to_namelist
 
   subroutine from_namelist(cfg)
@@ -65,6 +69,7 @@ contains
     cfg%detection_floor = detection_floor; cfg%detection_factor = detection_factor
     cfg%lubrication = lubrication; cfg%lubrication_handover = lubrication_handover
     cfg%lubrication_roughness = lubrication_roughness
+    cfg%max_impulse_sweeps = max_impulse_sweeps
   end subroutine from_namelist
 
   subroutine read_collision_group(deck, cfg)
@@ -87,6 +92,7 @@ contains
     call require_positive('collision', 'detection_factor', cfg%detection_factor)
     call require_positive('collision', 'lubrication_handover', cfg%lubrication_handover)
     call require_positive('collision', 'lubrication_roughness', cfg%lubrication_roughness)
+    call require_positive_int('collision', 'max_impulse_sweeps', cfg%max_impulse_sweeps)
   end subroutine check_collision_group
 
   subroutine write_collision_group(unit, cfg)

@@ -33,7 +33,8 @@ module collision
   implicit none
   private
   public :: collision_model_t, collision_result_t, collision_setup, collision_log_settings, detection_distance, &
-            collision_detected, approach_speed, collide, contact_matrix, contact_impulse, isotropic_inverse_mass
+            collision_detected, approach_speed, collide, contact_matrix, contact_impulse, isotropic_inverse_mass, &
+            normal_speed_at, normal_correction
 
   !> Both take either the closest-points result of the pair or its parts (gap, points, normal).
   interface collision_detected
@@ -56,6 +57,8 @@ module collision
     real(wp) :: friction_coefficient = 0.0_wp
     real(wp) :: detection_floor = 1.0e-9_wp   !< m
     real(wp) :: detection_factor = 1.0_wp
+    !> cap on the sequential-impulse sweeps over the contacts of one step (module particle_system)
+    integer :: max_sweeps = 200
   end type collision_model_t
 
   !> What one collision did (for the events table).
@@ -84,6 +87,7 @@ contains
     model%friction_coefficient = cfg%friction_coefficient
     model%detection_floor = cfg%detection_floor
     model%detection_factor = cfg%detection_factor
+    model%max_sweeps = cfg%max_impulse_sweeps
   end subroutine collision_setup
 
   subroutine collision_log_settings(model)
@@ -270,6 +274,58 @@ contains
     result%normal_velocity_after = dot_product(point_velocity(body1, xc) - point_velocity(body2, xc), n)
     result%energy_change = kinetic_energy(body1, added1) + kinetic_energy(body2, added2) - energy_before
   end subroutine collide_points
+
+  !> Normal approach speed (m/s, > 0 approaching) of the material points of both bodies at the
+  !> contact point x_c = (x1 + x2)/2, normal n from 1 to 2 (the v_n of collide()).
+  pure real(wp) function normal_speed_at(body1, body2, point1, point2, normal)
+    type(rigid_body_t), intent(in) :: body1, body2
+    real(wp), intent(in) :: point1(3), point2(3), normal(3)
+    real(wp) :: xc(3)
+    xc = 0.5_wp * (point1 + point2)
+    normal_speed_at = dot_product(point_velocity(body1, xc) - point_velocity(body2, xc), normal / norm2(normal))
+  end function normal_speed_at
+
+  !> A normal impulse dj n at x_c = (x1 + x2)/2 (on body 2; -dj n on body 1) that sets the normal
+  !> speed at x_c to -separation_speed (one projected Gauss-Seidel update of a contact: docs/theory.md,
+  !> "Particle system"): dj = (v_n + s) / (n^T K n), limited to dj >= -accumulated so that the
+  !> contact's total normal impulse stays >= 0 (a contact pushes, never pulls). accumulated is
+  !> updated; impulse: the impulse applied to body 2 (N s, lab). Momentum is conserved exactly as in
+  !> collide(); added1, added2 (both or neither) as there.
+  pure subroutine normal_correction(body1, body2, point1, point2, normal, separation_speed, accumulated, impulse, &
+                                    added1, added2)
+    type(rigid_body_t), intent(inout) :: body1, body2
+    real(wp), intent(in) :: point1(3), point2(3), normal(3), separation_speed
+    real(wp), intent(inout) :: accumulated
+    real(wp), intent(out) :: impulse(3)
+    type(added_inertia_t), intent(in), optional :: added1, added2
+    real(wp) :: xc(3), r1(3), r2(3), n(3), k(3, 3), inv1(3, 3), inv2(3, 3), vn, dj
+    logical :: in_fluid
+    in_fluid = present(added1) .and. present(added2)
+    n = normal / norm2(normal)
+    xc = 0.5_wp * (point1 + point2)
+    r1 = xc - body1%position
+    r2 = xc - body2%position
+    vn = dot_product(point_velocity(body1, xc) - point_velocity(body2, xc), n)
+    inv1 = inverse_inertia_lab(body1, added1)
+    inv2 = inverse_inertia_lab(body2, added2)
+    if (in_fluid) then
+      k = contact_matrix(inverse_mass_lab(body1, added1) + inverse_mass_lab(body2, added2), inv1, r1, inv2, r2)
+    else
+      k = contact_matrix(isotropic_inverse_mass(1.0_wp / body1%mass + 1.0_wp / body2%mass), inv1, r1, inv2, r2)
+    end if
+    dj = max((vn + separation_speed) / dot_product(n, matmul(k, n)), -accumulated)
+    accumulated = accumulated + dj
+    impulse = dj * n
+    if (in_fluid) then
+      call rigid_body_kick(body1, -impulse, cross(r1, -impulse), 1.0_wp, added1)
+      call rigid_body_kick(body2, impulse, cross(r2, impulse), 1.0_wp, added2)
+    else
+      body1%velocity = body1%velocity - impulse / body1%mass
+      body2%velocity = body2%velocity + impulse / body2%mass
+      call set_angular_velocity_lab(body1, angular_velocity_lab(body1) - matmul(inv1, cross(r1, impulse)))
+      call set_angular_velocity_lab(body2, angular_velocity_lab(body2) + matmul(inv2, cross(r2, impulse)))
+    end if
+  end subroutine normal_correction
 
   !> Inverse of a 3x3 matrix by cofactors (K is symmetric positive definite: m > 0, I > 0).
   pure function inverse3(a) result(b)

@@ -23,7 +23,7 @@ module dlvo
             dlvo_energy, dlvo_pair_forces, curvature_factor, chi_eta_eq14, chi_eta_derjaguin, &
             alpha_sine_squared, ion_number_density, grahame_surface_potential, reduced_surface_potential, &
             dlvo_evaluation_t, dlvo_evaluate, contact_curvature_factor, relative_normal_energy, escape_energy, &
-            dlvo_range, dlvo_range_debye_lengths
+            dlvo_range, dlvo_range_debye_lengths, dlvo_cutoff_gap, dlvo_cutoff_fraction
   public :: curvature_eq14, curvature_derjaguin, curvature_none
 
   integer, parameter :: curvature_eq14 = 1, curvature_derjaguin = 2, curvature_none = 3
@@ -32,6 +32,12 @@ module dlvo
   !> fallen by exp(-60) ~ 1e-26 there, so the barrier and any secondary minimum lie well inside,
   !> and beyond it only the weak vdW tail is left (U < 0, rising to 0).
   real(wp), parameter :: dlvo_range_debye_lengths = 60.0_wp
+
+  !> The DLVO cut-off of a many-body system (docs/theory.md, "Particle system"): a pair is left
+  !> out where each term of Eq. 13 has fallen below this fraction of its contact value (vdW at the
+  !> cut-off gap c, EDL at h = 0). The vdW tail ~ 1/h^2 sets the range, h = c / sqrt(f) = 100 c;
+  !> there the neglected energy, ~ 1/h, is 1% of the vdW energy at c (U(h) / U(c) = c / h).
+  real(wp), parameter :: dlvo_cutoff_fraction = 1.0e-4_wp
 
   !> Every constant of Eq. 13, derived once from the deck (&dlvo) and the particle radius.
   type :: dlvo_model_t
@@ -135,6 +141,22 @@ contains
     type(dlvo_model_t), intent(in) :: model
     dlvo_range = max(dlvo_range_debye_lengths / model%debye_kappa, model%vdw_cutoff)
   end function dlvo_range
+
+  !> Surface gap (m) beyond which both terms of Eq. 13 are below fraction (default
+  !> dlvo_cutoff_fraction) of their contact values: vdW (c / h)^2 <= f beyond h = c / sqrt(f), EDL
+  !> exp(-kappa h) <= f beyond h = ln(1/f) / kappa. chi_eta scales both terms alike, so the gap
+  !> holds for every pair of shapes and orientations.
+  pure real(wp) function dlvo_cutoff_gap(model, fraction)
+    type(dlvo_model_t), intent(in) :: model
+    real(wp), intent(in), optional :: fraction
+    real(wp) :: f
+    f = dlvo_cutoff_fraction
+    if (present(fraction)) f = fraction
+    dlvo_cutoff_gap = 0.0_wp
+    if (model%vdw_coefficient /= 0.0_wp) dlvo_cutoff_gap = model%vdw_cutoff / sqrt(f)
+    if (model%edl_coefficient /= 0.0_wp .and. model%debye_kappa > 0.0_wp) &
+      dlvo_cutoff_gap = max(dlvo_cutoff_gap, log(1.0_wp / f) / model%debye_kappa)
+  end function dlvo_cutoff_gap
 
   !> Ion number density of a z:z electrolyte from the Debye parameter:
   !> kappa^2 = 2 n z^2 e^2 / (eps_r eps0 k_B T) (Israelachvili 1992, ch. 12).

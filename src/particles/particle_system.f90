@@ -1,14 +1,15 @@
 !> N rigid spheroids, the pairs among them and their one particle step (docs/theory.md, "Particle
 !> system"; docs/design.md, data flow step 6).
 !>
-!> The system owns the bodies (shape, mass, inertia, state), the pairs i < j (closest points kept
+!> The system owns the bodies (shape, mass, inertia, state), the pair records (closest points kept
 !> as the warm start of the next step, the DLVO evaluation, this step's collision) and the loads the
 !> pair interactions put on each body. One step of length dt:
 !>   1. Newton-Euler update of every body under the external loads of the call (frozen over the
 !>      call: Stokes resistance in the pair scenes, resolved hydrodynamic loads later) plus the
 !>      DLVO loads of the current state; positions wrapped into the periodic box, if any;
-!>   2. closest points of every pair that may interact (periodic minimum image), warm-started;
-!>   3. collision test and impulse, pair by pair in the order of the pair list (below);
+!>   2. with a box, the near pairs of the broad phase (module broad_phase) merged with the last
+!>      records; closest points of every pair that may interact (periodic minimum image), warm-started;
+!>   3. collision impulses, swept over the contacts in the order of the records (below);
 !>   4. DLVO at the closest points, summed per body for the next Newton-Euler update.
 !> Steps 2-4 are particle_system_interact, which also prepares a new system (or one read back from
 !> a checkpoint), so that between calls the system is always CURRENT: contacts, collision loads and
@@ -16,13 +17,18 @@
 !> outcome test, a checkpoint or the next fluid step sees. The per-pair work is recomputed every
 !> particle step; nothing pair-related is ever frozen.
 !>
-!> Order of simultaneous impulses: the pairs are visited once per step in the order of the pair list,
-!> (1,2), (1,3), ..., (1,N), (2,3), ..., (N-1,N); each pair is tested with the velocities left by
-!> the impulses before it and its impulse applied at once (one sequential, Gauss-Seidel sweep).
-!> For three spheres in a line, 1 -> 2 -> 3, touching at the same step, the 1-2 impulse comes first
-!> and then the 2-3 test sees the velocity body 2 has just received: the Newton's cradle result.
+!> Pair records, sorted by (i, j): without a box every pair i < j, (1,2), (1,3), ..., (N-1,N); with
+!> a box the pairs whose bounding spheres are within the search gap (models%interaction_gap,
+!> widened by the collision reach), a pair still near keeping its record across steps. With a gap
+!> of huge() both are the full list (the pair scenes: results as they always were). Pairs beyond
+!> the gap skip steps 2-4; the DLVO force acts within models%interaction_gap only.
+!>
+!> Simultaneous impulses (resolve_collisions): in waves of the contacts approaching at the wave's
+!> start, each swept in the order of the records until no contact is off its restitution target
+!> (projected Gauss-Seidel), then the next wave, at most models%collision_model%max_sweeps sweeps.
+!> Three spheres in a line, 1 -> 2 -> 3: the 1-2 impulse, then in the next wave the 2-3 one, the
+!> Newton's cradle result, from either end. A pair alone is swept once (the single-pair arithmetic).
 !> Every impulse conserves linear and angular momentum and, with e = 1 head-on, energy (to round-off).
-!> Pairs whose bounding spheres are farther apart than models%interaction_gap skip steps 2-4.
 !> Optional sub-grid lubrication (module lubrication): after the collisions of step 3, pair by pair
 !> in the same order, an impulse implicit in the pair's normal velocity over dt, applied at once;
 !> its force (impulse / dt) is kept per body in lubrication_loads for the outputs.
@@ -38,16 +44,21 @@ module particle_system
   use spheroid, only: spheroid_t
   use rigid_body, only: rigid_body_t, added_inertia_t, rigid_body_step, kinetic_energy
   use closest_points, only: closest_points_t, find_closest_points
-  use dlvo, only: dlvo_model_t, dlvo_evaluation_t, dlvo_evaluate
-  use collision, only: collision_model_t, collision_result_t, collision_detected, collide
+  use dlvo, only: dlvo_model_t, dlvo_evaluation_t, dlvo_evaluate, dlvo_cutoff_gap
+  use collision, only: collision_model_t, collision_result_t, collision_detected, collide, approach_speed, &
+                       detection_distance, normal_speed_at, normal_correction, regime_frictionless
   use lubrication, only: lubrication_model_t, lubrication_result_t, lubricate
   use vector_algebra, only: cross
   use periodic_box, only: image_shift
+  use broad_phase, only: broad_phase_t, broad_phase_find, near_pair
+  use logger, only: log_line
+  use text_format, only: int_text
   implicit none
   private
   public :: particle_models_t, particle_pair_t, particle_loads_t, particle_system_t, particle_system_create, &
             particle_system_interact, particle_system_step, particle_loads_zero, &
             unwrapped_position, pair_image, pair_body_image, particle_system_energy, particle_system_set_added_inertia
+  public :: particle_interaction_gap, bounding_radius
 
   !> The pair models and how the bodies move; set up once by the scene.
   type :: particle_models_t
@@ -87,11 +98,21 @@ module particle_system
     integer(i8), allocatable :: wraps(:,:)               !< (3, n): net box crossings, for unwrapped positions
     real(wp) :: box_length(3) = 0.0_wp                   !< m, period per direction; 0 = unbounded
     type(particle_models_t) :: models
-    type(particle_pair_t), allocatable :: pairs(:)       !< (n (n - 1) / 2), in the order of the sweep
+    !> The pair records, sorted by (first, second): the order of the sweep. Without a box every pair
+    !> i < j (n (n - 1) / 2); with a box the near pairs of the broad phase (near_pairs_only).
+    type(particle_pair_t), allocatable :: pairs(:)
+    logical :: near_pairs_only = .false.                 !< periodic: pair records only for the near pairs
+    real(wp), allocatable :: bounding_radii(:)           !< (n) m, max(a, b): the bodies' bounding spheres
+    real(wp) :: search_gap = huge(1.0_wp)                !< m, the broad phase's gap of the last interaction
+    type(broad_phase_t) :: finder                        !< cell list of the broad phase (its arrays reused)
     type(particle_loads_t) :: dlvo_loads                 !< summed over pairs, current state
     type(particle_loads_t) :: collision_loads            !< impulse / dt of the last interaction (outputs)
     type(particle_loads_t) :: lubrication_loads          !< lubrication impulse / dt of the last interaction
     integer :: collisions_last = 0                       !< impulses in the last interaction
+    integer :: impulse_sweeps_last = 0                   !< sweeps of the last interaction that applied an impulse
+    integer :: impulse_sweeps_most = 0                   !< the most such sweeps of one interaction since creation
+    integer :: approaching_left = 0                      !< contacts still approaching when the last interaction hit the cap
+    integer(i8) :: sweep_caps_total = 0_i8               !< interactions that hit the cap since creation
     integer(i8) :: collisions_total = 0_i8               !< impulses since creation
     !> (n) the fluid's added masses that collision and lubrication impulses move with each body
     !> (module rigid_body, added_inertia_t): zero (bodies alone) unless a coupling that takes the
@@ -113,8 +134,11 @@ contains
 
   !> A system of the given shapes and bodies (same order). box_length: periods (0 = unbounded in
   !> that direction; absent = unbounded). contacts: closest points already known for the pairs in
-  !> the order of the pair list (e.g. from a placement), taken as current. The system is not yet
-  !> interacted: call particle_system_interact once before the first step.
+  !> the order of the full pair list (1,2), (1,3), ..., (N-1,N) (e.g. from a placement), taken as
+  !> current. Without a box every pair has a record; with one (periodic in some direction), only the
+  !> pairs the broad phase finds within the search gap (the interaction gap; a many-body scene sets
+  !> it to particle_interaction_gap(models), the DLVO cut-off; huge(): every pair). The system is not
+  !> yet interacted: call particle_system_interact once before the first step.
   subroutine particle_system_create(system, shapes, bodies, models, box_length, contacts)
     type(particle_system_t), intent(out) :: system
     type(spheroid_t), intent(in) :: shapes(:)
@@ -122,10 +146,11 @@ contains
     type(particle_models_t), intent(in) :: models
     real(wp), intent(in), optional :: box_length(3)
     type(closest_points_t), intent(in), optional :: contacts(:)
-    integer :: i, j, p
+    integer :: i, j, p, n
     if (size(shapes) /= size(bodies) .or. size(bodies) < 1) &
       call fatal('particle_system_create: one shape per body and at least one body are required')
     system%n = size(bodies)
+    n = system%n
     system%shapes = shapes
     system%bodies = bodies
     system%models = models
@@ -133,30 +158,64 @@ contains
       if (any(box_length < 0.0_wp)) call fatal('particle_system_create: box lengths must be >= 0 (0 = unbounded)')
       system%box_length = box_length
     end if
-    allocate(system%wraps(3, system%n))
+    allocate(system%bounding_radii(n))
+    do i = 1, n
+      system%bounding_radii(i) = bounding_radius(shapes(i))
+    end do
+    system%near_pairs_only = any(system%box_length > 0.0_wp)
+    allocate(system%wraps(3, n))
     system%wraps = 0_i8
     call wrap_positions(system)
-    allocate(system%pairs(system%n * (system%n - 1) / 2))
-    p = 0
-    do i = 1, system%n - 1
-      do j = i + 1, system%n
-        p = p + 1
-        system%pairs(p)%first = i
-        system%pairs(p)%second = j
+    if (system%near_pairs_only) then
+      call find_near_pairs(system, system%models%interaction_gap)
+      allocate(system%pairs(system%finder%count))
+      do p = 1, system%finder%count
+        system%pairs(p)%first = system%finder%first(p)
+        system%pairs(p)%second = system%finder%second(p)
       end do
-    end do
-    if (present(contacts)) then
-      if (size(contacts) /= size(system%pairs)) call fatal('particle_system_create: one contact per pair is required')
-      do p = 1, size(system%pairs)
-        system%pairs(p)%contact = contacts(p)
-        system%pairs(p)%active = contacts(p)%converged
+    else
+      allocate(system%pairs(n * (n - 1) / 2))
+      p = 0
+      do i = 1, n - 1
+        do j = i + 1, n
+          p = p + 1
+          system%pairs(p)%first = i
+          system%pairs(p)%second = j
+        end do
       end do
     end if
-    system%dlvo_loads = particle_loads_zero(system%n)
-    system%collision_loads = particle_loads_zero(system%n)
-    system%lubrication_loads = particle_loads_zero(system%n)
-    allocate(system%impulse_added(system%n))
+    if (present(contacts)) then
+      if (size(contacts) /= n * (n - 1) / 2) call fatal('particle_system_create: one contact per pair is required')
+      do p = 1, size(system%pairs)
+        ! Position of (i, j) in the full list: the pairs of the bodies before i, then j - i.
+        i = system%pairs(p)%first
+        j = system%pairs(p)%second
+        system%pairs(p)%contact = contacts((i - 1) * (2 * n - i) / 2 + j - i)
+        system%pairs(p)%active = system%pairs(p)%contact%converged
+      end do
+    end if
+    system%dlvo_loads = particle_loads_zero(n)
+    system%collision_loads = particle_loads_zero(n)
+    system%lubrication_loads = particle_loads_zero(n)
+    allocate(system%impulse_added(n))
   end subroutine particle_system_create
+
+  !> Radius (m) of a spheroid's bounding sphere: its larger semi-axis.
+  pure real(wp) function bounding_radius(shape)
+    type(spheroid_t), intent(in) :: shape
+    bounding_radius = max(shape%a, shape%b)
+  end function bounding_radius
+
+  !> The interaction gap (m, between bounding spheres) of a many-body system: the DLVO cut-off
+  !> (dlvo_cutoff_gap: both terms below dlvo_cutoff_fraction of their contact values), and at least
+  !> the lubrication hand-over gap h_out (the sub-grid force acts below it); 0 without either model
+  !> (collisions widen the broad phase's gap by their own detection reach every step).
+  pure real(wp) function particle_interaction_gap(models)
+    type(particle_models_t), intent(in) :: models
+    particle_interaction_gap = 0.0_wp
+    if (models%dlvo) particle_interaction_gap = dlvo_cutoff_gap(models%dlvo_model)
+    if (models%lubrication) particle_interaction_gap = max(particle_interaction_gap, models%lubrication_model%outer_gap)
+  end function particle_interaction_gap
 
   !> The added masses the bodies' contact and lubrication impulses carry from now on (one per body,
   !> body frame): those with which the coupling moves the bodies under their loads, so that an
@@ -205,23 +264,22 @@ contains
     call particle_system_interact(system, dt)
   end subroutine particle_system_step
 
-  !> The pair interactions of the current state (steps 2-4 of the module header): closest points of
-  !> the pairs that may interact (not recomputed where already current), collision impulses in the
-  !> order of the pair list, DLVO loads. dt scales the collision detection distance (v_n dt) and
-  !> the reported collision force (impulse / dt).
+  !> The pair interactions of the current state (steps 2-4 of the module header): with a box, the
+  !> near pairs of the broad phase first (records of pairs still near kept, with their warm starts);
+  !> closest points of the pairs that may interact (not recomputed where already current), collision
+  !> impulses in the order of the pair list, DLVO loads. dt scales the collision detection distance
+  !> (v_n dt) and the reported collision force (impulse / dt).
   subroutine particle_system_interact(system, dt)
     type(particle_system_t), intent(inout) :: system
     real(wp), intent(in) :: dt
     integer :: p
+    system%search_gap = system%models%interaction_gap
+    if (system%models%collisions) system%search_gap = max(system%search_gap, collision_reach(system, dt))
+    if (system%near_pairs_only) call refresh_pairs(system)
     do p = 1, size(system%pairs)
       call update_contact(system, system%pairs(p))
     end do
-    system%collision_loads%force = 0.0_wp
-    system%collision_loads%torque = 0.0_wp
-    system%collisions_last = 0
-    do p = 1, size(system%pairs)
-      call collide_pair(system, system%pairs(p), dt)
-    end do
+    call resolve_collisions(system, dt)
     system%lubrication_loads = particle_loads_zero(system%n)
     do p = 1, size(system%pairs)
       call lubricate_pair(system, system%pairs(p), dt)
@@ -233,21 +291,81 @@ contains
     end do
   end subroutine particle_system_interact
 
+  !> Gap (m) between bounding spheres within which a collision can be detected this step: the
+  !> detection distance max(floor, factor v_n dt) at the largest approach speed two bodies can
+  !> have, v_n <= s_i + s_j with s = |U| + |omega| max(a, b) (the fastest surface point).
+  real(wp) function collision_reach(system, dt)
+    type(particle_system_t), intent(in) :: system
+    real(wp), intent(in) :: dt
+    real(wp) :: fastest
+    integer :: i
+    fastest = 0.0_wp
+    do i = 1, system%n
+      fastest = max(fastest, norm2(system%bodies(i)%velocity) &
+                             + norm2(system%bodies(i)%angular_velocity_body) * system%bounding_radii(i))
+    end do
+    collision_reach = max(system%models%collision_model%detection_floor, &
+                          system%models%collision_model%detection_factor * 2.0_wp * fastest * dt)
+  end function collision_reach
+
+  !> The broad phase's near pairs at the current positions (system%finder).
+  subroutine find_near_pairs(system, gap)
+    type(particle_system_t), intent(inout) :: system
+    real(wp), intent(in) :: gap
+    real(wp), allocatable :: positions(:,:)
+    integer :: i
+    allocate(positions(3, system%n))
+    do i = 1, system%n
+      positions(:, i) = system%bodies(i)%position
+    end do
+    call broad_phase_find(system%finder, positions, system%bounding_radii, system%box_length, gap)
+  end subroutine find_near_pairs
+
+  !> Pair records for the near pairs of the current state, sorted by (first, second): a pair that
+  !> was near before keeps its record (closest points: the warm start; flags), a new one starts
+  !> from defaults, a pair no longer near is dropped. Both lists are sorted, so one merge pass.
+  subroutine refresh_pairs(system)
+    type(particle_system_t), intent(inout) :: system
+    type(particle_pair_t), allocatable :: records(:)
+    integer :: p, old, m
+    call find_near_pairs(system, system%search_gap)
+    m = system%finder%count
+    if (m == size(system%pairs)) then
+      if (all(system%pairs%first == system%finder%first(1:m)) .and. &
+          all(system%pairs%second == system%finder%second(1:m))) return   ! the same pairs: nothing to move
+    end if
+    allocate(records(m))
+    old = 1
+    do p = 1, m
+      associate (i => system%finder%first(p), j => system%finder%second(p))
+        do while (old <= size(system%pairs))
+          if (system%pairs(old)%first > i .or. (system%pairs(old)%first == i .and. system%pairs(old)%second >= j)) exit
+          old = old + 1
+        end do
+        if (old <= size(system%pairs)) then
+          if (system%pairs(old)%first == i .and. system%pairs(old)%second == j) records(p) = system%pairs(old)
+        end if
+        records(p)%first = i
+        records(p)%second = j
+      end associate
+    end do
+    call move_alloc(records, system%pairs)
+  end subroutine refresh_pairs
+
   !> Closest points of one pair, warm-started from its last ones; inactive (and its warm start
-  !> dropped) when the bounding spheres are farther apart than the models' interaction gap.
+  !> dropped) when the bounding spheres are farther apart than the broad phase's gap (the models'
+  !> interaction gap, widened by the collision reach).
   subroutine update_contact(system, pair)
     type(particle_system_t), intent(in) :: system
     type(particle_pair_t), intent(inout) :: pair
     type(closest_points_t) :: previous   ! a copy: the result overwrites pair%contact
     type(rigid_body_t) :: first, second
-    real(wp) :: reach
     character(len=40) :: which
     if (pair%active) return
     first = system%bodies(pair%first)
     second = pair_body_image(system, pair)
-    reach = max(system%shapes(pair%first)%a, system%shapes(pair%first)%b) &
-            + max(system%shapes(pair%second)%a, system%shapes(pair%second)%b)
-    if (norm2(second%position - first%position) - reach > system%models%interaction_gap) then
+    if (.not. near_pair(first%position, system%bodies(pair%second)%position, system%bounding_radii(pair%first), &
+                        system%bounding_radii(pair%second), system%box_length, system%search_gap)) then
       pair%contact = closest_points_t()
       return
     end if
@@ -261,19 +379,221 @@ contains
     pair%active = .true.
   end subroutine update_contact
 
-  !> Collision test and impulse of one pair on the current velocities (the bodies' own copies are
-  !> updated at once, so the next pair in the sweep sees them).
-  subroutine collide_pair(system, pair, dt)
+  !> Collision impulses of the step (docs/theory.md, "Particle system"), in waves. A wave is the set
+  !> of contacts approaching (within their detection distance) when it starts; its contacts are
+  !> swept in the order of the pair list (Gauss-Seidel) until none changes any more: each contact's
+  !> normal impulse of the wave is projected (normal_correction) so that the contact separates at
+  !> its restitution speed s = e v_n (v_n its approach speed at the start of the wave), never
+  !> pulling (the wave's normal impulse >= 0) - the projected Gauss-Seidel of a contact problem with
+  !> a restitution target (Moreau 1988; Catto 2005). The first impulse of a contact whose two bodies
+  !> have received no impulse yet in the step is the pair's impulse of module collision (collide(),
+  !> the pair's closure with its friction rule: exactly the single-pair arithmetic). Then the next
+  !> wave: the contacts the last one has set approaching, until none is. So contacts hit at once
+  !> are solved together (a symmetric hit has a symmetric outcome), and an impact runs down a chain
+  !> contact after contact (Newton's cradle). A contact is re-tested only when one of its bodies has
+  !> received an impulse since it was last tested, and counts as off its target only beyond
+  !> sweep_tolerance times the largest approach speed of the step (the level the sweeps converge
+  !> to). At most max_sweeps sweeps in all; one contact alone is swept once.
+  subroutine resolve_collisions(system, dt)
+    type(particle_system_t), intent(inout) :: system
+    real(wp), intent(in) :: dt
+    real(wp), parameter :: sweep_tolerance = 1.0e-10_wp
+    integer(i8), allocatable :: touched(:), tested(:)
+    real(wp), allocatable :: separation_speed(:), normal_impulse(:)
+    integer, allocatable :: members(:)
+    integer(i8) :: clock
+    integer :: p, q, sweeps, impulses, wave_size, cap
+    real(wp) :: fastest, slowest, speed
+    logical :: applied
+    system%collision_loads%force = 0.0_wp
+    system%collision_loads%torque = 0.0_wp
+    system%collisions_last = 0
+    system%impulse_sweeps_last = 0
+    system%approaching_left = 0
+    do p = 1, size(system%pairs)
+      system%pairs(p)%collided = .false.
+    end do
+    if (.not. system%models%collisions) return
+    allocate(touched(system%n), tested(size(system%pairs)), separation_speed(size(system%pairs)), &
+             normal_impulse(size(system%pairs)), members(size(system%pairs)))
+    touched = 0_i8
+    tested = -1_i8
+    clock = 0_i8
+    fastest = 0.0_wp
+    slowest = 0.0_wp
+    sweeps = 0
+    cap = system%models%collision_model%max_sweeps
+    waves: do
+      ! The wave: the contacts approaching now (only those whose bodies moved since their last test).
+      wave_size = 0
+      do p = 1, size(system%pairs)
+        associate (pair => system%pairs(p))
+          if (max(touched(pair%first), touched(pair%second)) <= tested(p)) cycle
+          tested(p) = clock
+          if (.not. pair%active) cycle
+          if (.not. pair_approaching(system, pair, dt, slowest, fastest)) cycle
+          wave_size = wave_size + 1
+          members(wave_size) = p
+          speed = normal_speed_at(system%bodies(pair%first), pair_body_image(system, pair), pair%contact%point1, &
+                                  pair%contact%point2, pair%contact%normal)
+          separation_speed(p) = system%models%collision_model%restitution * max(speed, 0.0_wp)
+          normal_impulse(p) = 0.0_wp
+          tested(p) = -1_i8            ! swept at least once in the wave
+        end associate
+      end do
+      if (wave_size == 0) exit waves
+      do
+        if (sweeps >= cap) exit waves
+        impulses = 0
+        do q = 1, wave_size
+          p = members(q)
+          associate (pair => system%pairs(p))
+            if (max(touched(pair%first), touched(pair%second)) <= tested(p)) cycle
+            if (touched(pair%first) == 0_i8 .and. touched(pair%second) == 0_i8) then
+              call collide_pair(system, pair, dt, slowest, applied, fastest)
+              if (applied) then
+                separation_speed(p) = pair%collision%restitution_used * pair%collision%normal_velocity_before
+                normal_impulse(p) = dot_product(pair%collision%impulse, pair%collision%normal)
+              end if
+            else
+              call correct_pair(system, pair, dt, slowest, separation_speed(p), normal_impulse(p), applied)
+            end if
+            if (applied) then
+              clock = clock + 1_i8
+              touched(pair%first) = clock
+              touched(pair%second) = clock
+              impulses = impulses + 1
+            end if
+            tested(p) = clock
+          end associate
+        end do
+        if (impulses == 0) exit
+        sweeps = sweeps + 1
+        slowest = sweep_tolerance * fastest
+      end do
+    end do waves
+    system%impulse_sweeps_last = sweeps
+    system%impulse_sweeps_most = max(system%impulse_sweeps_most, sweeps)
+    if (sweeps < cap) return
+    ! The cap was reached: count the contacts still approaching.
+    do p = 1, size(system%pairs)
+      associate (pair => system%pairs(p))
+        if (.not. pair%active) cycle
+        if (pair_approaching(system, pair, dt, slowest)) system%approaching_left = system%approaching_left + 1
+      end associate
+    end do
+    if (system%approaching_left == 0) return
+    system%sweep_caps_total = system%sweep_caps_total + 1_i8
+    ! Logged the 1st, 10th, 100th, ... time (a long run that keeps hitting the cap says so, not every step).
+    if (system%sweep_caps_total == 10_i8**int(log10(real(system%sweep_caps_total, wp)))) &
+      call log_line('particle system: the impulse sweeps reached &collision max_impulse_sweeps = '// &
+                    int_text(cap)//' with '//int_text(system%approaching_left)//' contact(s) still approaching ('// &
+                    int_text(system%sweep_caps_total)//' step(s) so far)')
+  end subroutine resolve_collisions
+
+  !> One projected Gauss-Seidel update of a contact of the wave (resolve_collisions): applied when
+  !> the contact's normal speed is off its target -separation_speed by more than slowest and the
+  !> wave's normal impulse may move that way (it stays >= 0).
+  subroutine correct_pair(system, pair, dt, slowest, separation_speed, normal_impulse, applied)
     type(particle_system_t), intent(inout) :: system
     type(particle_pair_t), intent(inout) :: pair
-    real(wp), intent(in) :: dt
+    real(wp), intent(in) :: dt, slowest, separation_speed
+    real(wp), intent(inout) :: normal_impulse
+    logical, intent(out) :: applied
+    type(rigid_body_t) :: second
+    real(wp) :: speed, impulse(3), before
+    applied = .false.
+    second = pair_body_image(system, pair)
+    speed = normal_speed_at(system%bodies(pair%first), second, pair%contact%point1, pair%contact%point2, &
+                            pair%contact%normal)
+    if (.not. (speed + separation_speed > slowest .or. &
+               (speed + separation_speed < -slowest .and. normal_impulse > 0.0_wp))) return
+    before = normal_impulse
+    if (system%impulses_in_fluid) then
+      call normal_correction(system%bodies(pair%first), second, pair%contact%point1, pair%contact%point2, &
+                             pair%contact%normal, separation_speed, normal_impulse, impulse, &
+                             system%impulse_added(pair%first), system%impulse_added(pair%second))
+    else
+      call normal_correction(system%bodies(pair%first), second, pair%contact%point1, pair%contact%point2, &
+                             pair%contact%normal, separation_speed, normal_impulse, impulse)
+    end if
+    if (.not. (abs(normal_impulse - before) > 0.0_wp)) return
+    system%bodies(pair%second)%velocity = second%velocity
+    system%bodies(pair%second)%angular_velocity_body = second%angular_velocity_body
+    applied = .true.
+    if (.not. pair%collided) then
+      pair%collision = collision_result_t()
+      pair%collision%contact_point = 0.5_wp * (pair%contact%point1 + pair%contact%point2)
+      pair%collision%normal = pair%contact%normal / norm2(pair%contact%normal)
+      pair%collision%normal_velocity_before = speed
+      pair%collision%regime = regime_frictionless
+      pair%collided = .true.
+      system%collisions_last = system%collisions_last + 1
+      system%collisions_total = system%collisions_total + 1_i8
+    end if
+    pair%collision%impulse = pair%collision%impulse + impulse
+    pair%collision%normal_velocity_after = normal_speed_at(system%bodies(pair%first), second, pair%contact%point1, &
+                                                           pair%contact%point2, pair%contact%normal)
+    if (pair%collision%normal_velocity_before > 0.0_wp) pair%collision%restitution_used = &
+        max(0.0_wp, -pair%collision%normal_velocity_after / pair%collision%normal_velocity_before)
+    call add_impulse_loads(system, pair, impulse, second%position, dt)
+  end subroutine correct_pair
+
+  !> The collision loads of the outputs (impulse / dt, paper Eq. 17) of an impulse on the pair's
+  !> second body (its image at second_position) and the opposite one on the first, at x_c.
+  subroutine add_impulse_loads(system, pair, impulse, second_position, dt)
+    type(particle_system_t), intent(inout) :: system
+    type(particle_pair_t), intent(in) :: pair
+    real(wp), intent(in) :: impulse(3), second_position(3), dt
+    real(wp) :: force(3), point(3)
+    force = impulse / dt
+    point = pair%collision%contact_point
+    associate (loads => system%collision_loads)
+      loads%force(:, pair%first) = loads%force(:, pair%first) - force
+      loads%force(:, pair%second) = loads%force(:, pair%second) + force
+      loads%torque(:, pair%first) = loads%torque(:, pair%first) + cross(point - system%bodies(pair%first)%position, -force)
+      loads%torque(:, pair%second) = loads%torque(:, pair%second) + cross(point - second_position, force)
+    end associate
+  end subroutine add_impulse_loads
+
+  !> The collision test of one pair on the current velocities: approaching faster than slowest and
+  !> within the detection distance (module collision); fastest: raised to the pair's approach speed.
+  logical function pair_approaching(system, pair, dt, slowest, fastest)
+    type(particle_system_t), intent(in) :: system
+    type(particle_pair_t), intent(in) :: pair
+    real(wp), intent(in) :: dt, slowest
+    real(wp), intent(inout), optional :: fastest
+    real(wp) :: speed
+    type(rigid_body_t) :: second
+    second = pair_body_image(system, pair)
+    if (slowest > 0.0_wp) then
+      speed = approach_speed(system%bodies(pair%first), second, pair%contact%point1, pair%contact%point2, &
+                             pair%contact%normal)
+      if (present(fastest)) fastest = max(fastest, speed)
+      pair_approaching = speed > slowest .and. pair%contact%gap < detection_distance(system%models%collision_model, speed, dt)
+    else
+      pair_approaching = collision_detected(system%models%collision_model, system%bodies(pair%first), second, &
+                                            pair%contact, dt)
+      if (present(fastest) .and. pair_approaching) fastest = max(fastest, approach_speed(system%bodies(pair%first), &
+          second, pair%contact%point1, pair%contact%point2, pair%contact%normal))
+    end if
+  end function pair_approaching
+
+  !> Collision test and impulse of one pair on the current velocities (the bodies' own copies are
+  !> updated at once, so the next pair in the sweep sees them); slowest: the smallest approach speed
+  !> that counts (0: any, the single-pass test); fastest: the largest approach speed met so far.
+  subroutine collide_pair(system, pair, dt, slowest, applied, fastest)
+    type(particle_system_t), intent(inout) :: system
+    type(particle_pair_t), intent(inout) :: pair
+    real(wp), intent(in) :: dt, slowest
+    logical, intent(out) :: applied
+    real(wp), intent(inout) :: fastest
     type(rigid_body_t) :: second
     real(wp) :: force(3)
-    pair%collided = .false.
-    if (.not. (system%models%collisions .and. pair%active)) return
+    applied = .false.
+    if (.not. pair%active) return
+    if (.not. pair_approaching(system, pair, dt, slowest, fastest)) return
     second = pair_body_image(system, pair)
-    if (.not. collision_detected(system%models%collision_model, system%bodies(pair%first), second, pair%contact, dt)) &
-      return
     if (system%impulses_in_fluid) then
       call collide(system%models%collision_model, system%bodies(pair%first), second, pair%contact, pair%collision, &
                    system%impulse_added(pair%first), system%impulse_added(pair%second))
@@ -283,6 +603,7 @@ contains
     system%bodies(pair%second)%velocity = second%velocity
     system%bodies(pair%second)%angular_velocity_body = second%angular_velocity_body
     pair%collided = .true.
+    applied = .true.
     system%collisions_last = system%collisions_last + 1
     system%collisions_total = system%collisions_total + 1_i8
     ! The collision force of the outputs: the impulse over dt (paper, Eq. 17) at the contact point.
@@ -331,6 +652,12 @@ contains
     type(rigid_body_t) :: second
     pair%dlvo = dlvo_evaluation_t()
     if (.not. (system%models%dlvo .and. pair%active)) return
+    ! Within the collision reach but beyond the interaction gap: below the DLVO cut-off.
+    if (system%models%interaction_gap < system%search_gap) then
+      if (.not. near_pair(system%bodies(pair%first)%position, system%bodies(pair%second)%position, &
+                          system%bounding_radii(pair%first), system%bounding_radii(pair%second), system%box_length, &
+                          system%models%interaction_gap)) return
+    end if
     second = pair_body_image(system, pair)
     call dlvo_evaluate(system%models%dlvo_model, system%shapes(pair%first), system%bodies(pair%first), &
                        system%shapes(pair%second), second, pair%contact, pair%dlvo)

@@ -5,6 +5,9 @@
 !> start), its DLVO evaluation and flags, the per-body loads and the collision counters. Shapes,
 !> models and the box are the scene's set-up, rebuilt from the deck: restore into a system created
 !> from them, and do not call particle_system_interact again.
+!> The pair arrays follow the system's pair records: every pair i < j in the order (1,2), (1,3), ...
+!> for a system without a box, the near pairs with a box; pair_bodies (2, pairs) names them, and a
+!> state without pair_bodies (a checkpoint of a pair scene) means the full list.
 module particle_system_state
   use agglo_kinds, only: wp, i8
   use error_handling, only: fatal
@@ -25,6 +28,7 @@ module particle_system_state
     !> (17, pairs): chi_eta, force, vdw_force, edl_force, energy, force1(3), torque1(3), force2(3), torque2(3)
     real(wp), allocatable :: dlvo(:,:)
     integer, allocatable :: flags(:,:)           !< (3, pairs): active, contact converged, collided (0 | 1)
+    integer, allocatable :: pair_bodies(:,:)     !< (2, pairs): first, second (absent: the full list i < j)
     !> (12, n): DLVO force(3), torque(3), collision force(3), torque(3)
     real(wp), allocatable :: loads(:,:)
     integer(i8) :: counters(2) = 0_i8            !< collisions_total, collisions_last
@@ -40,6 +44,9 @@ contains
     allocate(state%contacts(contact_rows, size(system%pairs)), state%dlvo(dlvo_rows, size(system%pairs)), &
              state%flags(flag_rows, size(system%pairs)))
     state%wraps = system%wraps
+    allocate(state%pair_bodies(2, size(system%pairs)))
+    state%pair_bodies(1, :) = system%pairs%first
+    state%pair_bodies(2, :) = system%pairs%second
     do i = 1, system%n
       associate (body => system%bodies(i))
         state%bodies(:, i) = [body%position, body%velocity, body%quaternion, body%angular_velocity_body]
@@ -68,6 +75,11 @@ contains
     if (.not. (allocated(state%bodies) .and. allocated(state%wraps) .and. allocated(state%contacts) .and. &
                allocated(state%dlvo) .and. allocated(state%flags) .and. allocated(state%loads))) &
       call fatal('particle_system_restore: the saved particle state is incomplete')
+    if (allocated(state%pair_bodies)) then
+      call restore_pair_list(system, state%pair_bodies)
+    else if (size(system%pairs) /= system%n * (system%n - 1) / 2) then
+      call restore_pair_list(system, full_pair_list(system%n))
+    end if
     if (any(shape(state%bodies) /= [body_rows, system%n]) .or. any(shape(state%wraps) /= [3, system%n]) .or. &
         any(shape(state%loads) /= [load_rows, system%n]) .or. &
         any(shape(state%contacts) /= [contact_rows, size(system%pairs)]) .or. &
@@ -119,4 +131,41 @@ contains
     system%collisions_total = state%counters(1)
     system%collisions_last = int(state%counters(2))
   end subroutine particle_system_restore
+
+  !> Every pair i < j of n bodies, (2, n (n - 1) / 2), in the order (1,2), (1,3), ..., (n-1,n).
+  pure function full_pair_list(n) result(list)
+    integer, intent(in) :: n
+    integer :: list(2, n * (n - 1) / 2)
+    integer :: i, j, p
+    p = 0
+    do i = 1, n - 1
+      do j = i + 1, n
+        p = p + 1
+        list(:, p) = [i, j]
+      end do
+    end do
+  end function full_pair_list
+
+  !> Pair records for the saved pairs (first, second), which must be pairs i < j of this system's
+  !> bodies in increasing order (the order of the sweep).
+  subroutine restore_pair_list(system, pair_bodies)
+    type(particle_system_t), intent(inout) :: system
+    integer, intent(in) :: pair_bodies(:,:)
+    integer :: p
+    logical :: valid
+    valid = size(pair_bodies, 1) == 2
+    if (valid .and. size(pair_bodies, 2) > 0) valid = all(pair_bodies(1, :) >= 1) .and. &
+        all(pair_bodies(1, :) < pair_bodies(2, :)) .and. all(pair_bodies(2, :) <= system%n)
+    do p = 2, size(pair_bodies, 2)
+      if (.not. valid) exit
+      valid = pair_bodies(1, p - 1) < pair_bodies(1, p) .or. &
+              (pair_bodies(1, p - 1) == pair_bodies(1, p) .and. pair_bodies(2, p - 1) < pair_bodies(2, p))
+    end do
+    if (.not. valid) call fatal('particle_system_restore: the saved pairs are not pairs i < j of the system''s '// &
+                                'bodies in increasing order')
+    if (allocated(system%pairs)) deallocate(system%pairs)
+    allocate(system%pairs(size(pair_bodies, 2)))
+    system%pairs%first = pair_bodies(1, :)
+    system%pairs%second = pair_bodies(2, :)
+  end subroutine restore_pair_list
 end module particle_system_state

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# checks: 26
+# checks: 27
 # Bad &dlvo / &collision / &pair integrator input is rejected before anything runs, with a message
 # naming the group, the variable, the value and the allowed range (docs/decks.md). Each case runs
 # $AGGLO on a small fluid-free pair deck and greps the error; the defaults must pass the checks.
@@ -27,6 +27,8 @@ expect_error detection_floor_zero "&collision detection_floor = 0.00000E+00 is n
   "&collision detection_floor = 0.0 /"
 expect_error detection_factor_negative "&collision detection_factor = -1.00000E+00 is not allowed; allowed: > 0" \
   "&collision detection_factor = -1.0 /"
+expect_error max_impulse_sweeps_zero "&collision max_impulse_sweeps = 0 is not allowed; allowed: an integer >= 1" \
+  "&collision max_impulse_sweeps = 0 /"
 expect_error detection_floor_vs_radius "&collision detection_floor = 1.00000E-06 is not allowed; allowed: < 0.01 * &pair radius" \
   "&collision detection_floor = 1.0e-6 /"
 expect_error hamaker_negative "&dlvo hamaker = -2.23000E-20 is not allowed; allowed: >= 0" "&dlvo hamaker = -22.3e-21 /"

@@ -1,8 +1,10 @@
-! checks: 40
+! checks: 47
 !> Unit tests of particle_system: three spheres in a line colliding head-on (Newton's cradle, in the
 !> order of the pair list), eight spheroids placed at random without overlap in a periodic box and
 !> stepped with DLVO and collisions, and a pair straddling the periodic boundary against the same
-!> pair in the interior.
+!> pair in the interior; 200 spheres in a periodic box with the DLVO cut-off: pair records for the
+!> near pairs only (against brute force), kept across steps (warm starts), the cut-off's effect on
+!> the DLVO loads bounded by its fraction, momentum, and a restart bit for bit.
 program test_particle_system
   use agglo_kinds, only: wp, i8
   use config_dlvo, only: dlvo_config_t
@@ -13,13 +15,14 @@ program test_particle_system
   use quaternion, only: random_orientation
   use random_stream, only: random_stream_t, stream_seed, stream_uniform, stream_normal
   use closest_points, only: closest_points_t, find_closest_points
-  use dlvo, only: dlvo_setup
+  use dlvo, only: dlvo_setup, dlvo_cutoff_fraction, dlvo_vdw_force
+  use broad_phase, only: all_near_pairs
   use collision, only: collision_setup
   use pair_setup, only: pair_t, build_pair
   use pair_outcome, only: pair_outcome_t, pair_outcome_of, pair_outcome_rules_of
   use particle_system, only: particle_models_t, particle_system_t, particle_system_create, particle_system_interact, &
                              particle_system_step, particle_system_energy, unwrapped_position, &
-                             pair_body_image
+                             pair_body_image, particle_interaction_gap, particle_system_step
   use periodic_box, only: minimum_image
   use particle_system_state, only: particle_system_state_t, particle_system_save, particle_system_restore
   use test_framework, only: test_start, test_finish, check, check_close, check_below, check_equal
@@ -32,6 +35,7 @@ program test_particle_system
   call pair_across_the_boundary()
   call restart_from_saved_state()
   call broad_phase()
+  call many_bodies_near_pairs()
   call test_finish()
 
 contains
@@ -49,10 +53,10 @@ contains
   end function models_of
 
   !> Three equal spheres on the x axis, 0.5 nm apart (below the 1 nm detection floor). Struck from
-  !> body 1 at v: one interaction (one step's sweep over the pairs in the order (1,2), (1,3), (2,3))
-  !> passes the velocity through: (v, 0, 0) -> (0, 0, v) with e = 1, two impulses. Struck from body 3
-  !> the (2,3) impulse comes last in the sweep, so the (1,2) one follows in the next step: the same
-  !> end state one step later. Momentum and energy conserved to round-off (e = 1, head-on).
+  !> body 1 at v: one interaction passes the velocity through, (v, 0, 0) -> (0, 0, v) with e = 1,
+  !> in two impulses (two waves of contacts: (1,2), then (2,3)). Struck from body 3 the same in the
+  !> other direction, although (2,3) comes last in the order of the pair list; nothing is left for
+  !> the next step. Momentum and energy conserved to round-off (e = 1, head-on).
   subroutine newtons_cradle()
     type(spheroid_t) :: sphere
     type(rigid_body_t) :: bodies(3)
@@ -76,14 +80,14 @@ contains
       e0 = particle_system_energy(system)
       call particle_system_interact(system, dt)
       if (direction == 1) then
-        call check_equal(system%collisions_last, 2, 'cradle_both_impulses_in_one_sweep')
+        call check_equal(system%collisions_last, 2, 'cradle_both_impulses_in_one_interaction')
         call check_close(system%bodies(3)%velocity(1), v, 1.0e-13_wp, 'cradle_last_sphere_leaves_at_v')
         call check_below(abs(system%bodies(1)%velocity(1)) + abs(system%bodies(2)%velocity(1)), 1.0e-13_wp * v, &
                          'cradle_first_two_at_rest')
       else
-        call check_equal(system%collisions_last, 1, 'cradle_reversed_one_impulse_in_first_sweep')
+        call check_equal(system%collisions_last, 2, 'cradle_reversed_both_impulses_in_one_interaction')
         call particle_system_step(system, dt)
-        call check_equal(system%collisions_last, 1, 'cradle_reversed_second_impulse_next_step')
+        call check_equal(system%collisions_last, 0, 'cradle_reversed_nothing_left_next_step')
         call check_close(system%bodies(1)%velocity(1), -v, 1.0e-13_wp, 'cradle_reversed_first_sphere_leaves_at_v')
         call check_below(abs(system%bodies(2)%velocity(1)) + abs(system%bodies(3)%velocity(1)), 1.0e-13_wp * v, &
                          'cradle_reversed_last_two_at_rest')
@@ -314,6 +318,116 @@ contains
                'attraction pulls body 1 towards body 2 (+x)')
     call check_close(system%pairs(1)%contact%gap, 10.0e-6_wp, 1.0e-12_wp, 'no_cut_off_gap')
   end subroutine broad_phase
+
+  !> 200 spheres (radius r) at random without overlap in a periodic cube (20% by volume), random
+  !> velocities of 0.2 m/s, DLVO and collisions. With the interaction gap of particle_interaction_gap
+  !> (the DLVO cut-off, 100 vdW cut-offs = 500 nm) the DLVO loads differ from those of all pairs
+  !> (no cut-off) by less than (N - 1) times the cut-off fraction of the contact value (each pair
+  !> left out is below it). With a gap of 0.2 r, over 2000 steps of 1e-7 s: the pair records are
+  !> exactly the near pairs of brute force at the search gap, far fewer than all pairs; a pair still
+  !> near after a step keeps its record (closest points: the warm start); momentum is
+  !> conserved; saved at step 1000 and restored into a fresh system, the run continues bit for bit.
+  subroutine many_bodies_near_pairs()
+    integer, parameter :: n = 200, steps = 2000
+    real(wp), parameter :: dt = 1.0e-7_wp, speed = 0.2_wp
+    type(spheroid_t) :: sphere
+    type(rigid_body_t) :: bodies(n)
+    type(particle_system_t) :: system, everything, restarted
+    type(particle_models_t) :: models
+    type(particle_system_state_t) :: state
+    type(random_stream_t) :: stream
+    real(wp) :: box, position(3), positions(3, n), p0(3), bound, difference
+    integer, allocatable :: first(:), second(:)
+    integer :: i, j, p, step, moved
+    integer, allocatable :: old_first(:), old_second(:)
+    logical :: clear, same
+    character(len=100) :: detail
+    sphere = make_spheroid('sphere', radius, density)
+    box = (real(n, wp) * (4.0_wp / 3.0_wp) * acos(-1.0_wp) * radius**3 / 0.2_wp)**(1.0_wp / 3.0_wp)
+    call stream_seed(stream, 33_i8, 2)
+    do i = 1, n
+      do
+        position = box * [stream_uniform(stream), stream_uniform(stream), stream_uniform(stream)]
+        clear = .true.
+        do j = 1, i - 1
+          clear = clear .and. norm2(minimum_image(position - bodies(j)%position, [box, box, box])) > 2.0_wp * radius &
+                                                                                                     + 1.0e-6_wp
+        end do
+        if (clear) exit
+      end do
+      call rigid_body_of_spheroid(bodies(i), sphere, position, [1.0_wp, 0.0_wp, 0.0_wp, 0.0_wp], &
+          velocity=speed * [stream_normal(stream), stream_normal(stream), stream_normal(stream)])
+    end do
+    models = models_of(.true., 0.4_wp)
+    models%interaction_gap = particle_interaction_gap(models)
+    call particle_system_create(system, spread(sphere, 1, n), bodies, models, box_length=[box, box, box])
+    call particle_system_interact(system, dt)
+    ! Without the cut-off: every pair (the same bodies, one interaction).
+    models%interaction_gap = huge(1.0_wp)
+    call particle_system_create(everything, spread(sphere, 1, n), bodies, models, box_length=[box, box, box])
+    call particle_system_interact(everything, dt)
+    bound = real(n - 1, wp) * dlvo_cutoff_fraction * abs(dlvo_vdw_force(system%models%dlvo_model, &
+                                                                        system%models%dlvo_model%vdw_cutoff, 1.0_wp))
+    difference = maxval(norm2(system%dlvo_loads%force - everything%dlvo_loads%force, dim=1))
+    call check(difference <= bound .and. size(everything%pairs) == n * (n - 1) / 2, 'many_bodies_dlvo_cut_off_bounded')
+    ! The run: a wider gap (0.2 r), so that many pairs come and go.
+    models%interaction_gap = 0.2_wp * radius
+    call particle_system_create(system, spread(sphere, 1, n), bodies, models, box_length=[box, box, box])
+    call particle_system_interact(system, dt)
+    p0 = total_momentum(system)
+    do step = 1, steps
+      call particle_system_step(system, dt)
+      if (step == steps / 2) call particle_system_save(system, state)
+    end do
+    call check(system%collisions_total > 0_i8, 'many_bodies_collided')
+    call check_below(norm2(total_momentum(system) - p0) / norm2(p0), 1.0e-12_wp, 'many_bodies_momentum_conserved')
+    do i = 1, n
+      positions(:, i) = system%bodies(i)%position
+    end do
+    call all_near_pairs(positions, system%bounding_radii, system%box_length, system%search_gap, first, second)
+    same = size(first) == size(system%pairs)
+    if (same) same = all(system%pairs%first == first) .and. all(system%pairs%second == second)
+    call check(same, 'many_bodies_records_are_the_near_pairs')
+    write(detail, '(a,i0,a,i0,a,es10.3,a)') 'records ', size(system%pairs), ' of ', n * (n - 1) / 2, ' pairs (gap ', &
+        system%search_gap, ' m)'
+    call check(size(system%pairs) > 0 .and. size(system%pairs) < n * (n - 1) / 2 / 20, 'many_bodies_few_records', &
+               trim(detail))
+    call particle_system_create(restarted, spread(sphere, 1, n), bodies, system%models, box_length=[box, box, box])
+    call particle_system_restore(restarted, state)
+    do step = steps / 2 + 1, steps
+      call particle_system_step(restarted, dt)
+    end do
+    ! Exact comparison on purpose: a restart must reproduce the uninterrupted run bit for bit.
+    same = size(restarted%pairs) == size(system%pairs) .and. restarted%collisions_total == system%collisions_total
+    do i = 1, n
+      same = same .and. all(restarted%bodies(i)%position == system%bodies(i)%position) .and. &
+             all(restarted%bodies(i)%velocity == system%bodies(i)%velocity)
+    end do
+    call check(same, 'many_bodies_restart_bit_for_bit')
+    ! Records across steps: mark every current record (its closest points stay current: active),
+    ! move one body half a box away, interact again. Every record of the other bodies must be the
+    ! marked one (kept, warm start and all), none of the moved body's.
+    old_first = restarted%pairs%first
+    old_second = restarted%pairs%second
+    do p = 1, size(restarted%pairs)
+      restarted%pairs(p)%contact%iterations = 100000 + p
+    end do
+    moved = restarted%pairs(1)%first
+    restarted%bodies(moved)%position = modulo(restarted%bodies(moved)%position + 0.5_wp * box, box)
+    call particle_system_interact(restarted, dt)
+    same = size(restarted%pairs) > 0
+    do p = 1, size(restarted%pairs)
+      associate (pair => restarted%pairs(p))
+        if (pair%first == moved .or. pair%second == moved) then
+          same = same .and. pair%contact%iterations < 100000
+        else
+          j = findloc(old_first * (n + 1) + old_second, pair%first * (n + 1) + pair%second, dim=1)
+          same = same .and. j > 0 .and. pair%contact%iterations == 100000 + j
+        end if
+      end associate
+    end do
+    call check(same .and. count(old_first == moved .or. old_second == moved) > 0, 'many_bodies_records_kept_across_steps')
+  end subroutine many_bodies_near_pairs
 
   function total_momentum(system) result(p)
     type(particle_system_t), intent(in) :: system
