@@ -1,4 +1,3 @@
-! checks: 21
 !> The Crank-Nicolson predictor with the immersed-boundary rows solved with hypre (immersed_predictor):
 !> - simple-cubic sphere array, phi = 0.125, D/dx = 8.06 (13^3): at nu dt / dx^2 = 0.06 (below the
 !>   explicit-diffusion limit) the steady K equals the explicit-diffusion run's to 0.1% (the same
