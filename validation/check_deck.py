@@ -1,0 +1,201 @@
+#!/usr/bin/env python3
+"""Checks of the validation decks (validation/decks/*.nml) on the outputs of their `agglo` runs.
+
+    check_deck.py CASE RUN_DIRECTORY [RUN_DIRECTORY ...]
+
+reads the run directories (run.nml, bodies_loads.dat, the last field snapshot; docs/outputs.md),
+prints one Markdown table row
+
+    | case | reference (citation) | measured | error | tolerance |
+
+and exits with status 1 when the error is outside the stated tolerance (2 on a usage error).
+CASE is one of:
+
+sphere_array  one run of a fixed sphere in the periodic cube (a simple-cubic array) driven by a
+              uniform body force f to steady state: K = f L^3 / (6 pi mu a U), U the superficial
+              velocity (the flux through the x-face plane i = nx, which the sphere never cuts, over
+              its area, from the last field snapshot), against Zick & Homsy (1982, J. Fluid Mech. 115,
+              13, Table 2) K = 4.292 at phi = 0.125 (2.810 at 0.064, 2.008 at 0.027).
+rotating      runs of a sphere turning at Omega about z in boxes of several sizes: the steady torque
+              T of the last step over 8 pi mu a^3 Omega (Stokes, unbounded), extrapolated to a/L = 0
+              by a least-squares line in (a/L)^3 (the periodic images' correction), against 1.
+oscillating   one run of a sphere oscillating along x, c0 + A sin(omega t): the x force fitted over
+              the last whole period by a cos(omega t) + b sin(omega t) + c (the load of step n at the
+              middle of the step), F = a - i b, against Stokes' (1851) force on a sphere in
+              translational oscillation (Landau & Lifshitz, Fluid Mechanics, section 24, problem 5)
+              with the periodic box's mean-flow correction; error of the amplitude (the phase is
+              printed beside it and held to 4 degrees).
+"""
+import math
+import re
+import sys
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+# Zick & Homsy 1982, J. Fluid Mech. 115, 13, Table 2: K of a simple-cubic array of spheres.
+ZICK_HOMSY = {0.027: 2.008, 0.064: 2.810, 0.125: 4.292}
+
+
+def read_namelist(path):
+    """The resolved deck run.nml as {'GROUP': {'VARIABLE': [values as text]}} (repeats n*v expanded)."""
+    groups, group, name = {}, None, None
+    for line in Path(path).read_text().splitlines():
+        line = line.strip()
+        if not line or line.startswith('!'):
+            continue
+        if line.startswith('&'):
+            group = groups.setdefault(line[1:].upper(), {})
+            continue
+        if line == '/':
+            group = None
+            continue
+        match = re.match(r'([A-Za-z_][A-Za-z0-9_]*)(\([^)]*\))?\s*=(.*)', line)
+        if match:
+            name, text = match.group(1).upper(), match.group(3)
+            group[name] = []
+        else:
+            text = line
+        for item in re.findall(r'"[^"]*"|\'[^\']*\'|[^,\s]+', text):
+            count, star, value = item.partition('*') if not item.startswith(('"', "'")) else ('', '', item)
+            if star:
+                group[name].extend([value] * int(count))
+            else:
+                group[name].append(item)
+    return groups
+
+
+def number(deck, group, variable, index=0):
+    return float(deck[group][variable][index].replace('D', 'E').replace('d', 'e'))
+
+
+def read_loads(run):
+    """bodies_loads.dat as an array (rows, 25 columns): step, time, body, force, torque, ..."""
+    return np.loadtxt(Path(run) / 'bodies_loads.dat', comments='#', ndmin=2)
+
+
+def last_field(run):
+    snapshots = sorted(Path(run).glob('fields_*.h5'))
+    if not snapshots:
+        raise SystemExit(f'check_deck: no field snapshot in {run}')
+    return h5py.File(snapshots[-1], 'r')
+
+
+def row(case, reference, measured, error, tolerance, inside):
+    print(f'| {case} | {reference} | {measured} | {error} | {tolerance} |', flush=True)
+    return 0 if inside else 1
+
+
+def sphere_array(runs):
+    run = runs[0]
+    deck = read_namelist(Path(run) / 'run.nml')
+    mu = number(deck, 'FLUID', 'VISCOSITY') * number(deck, 'FLUID', 'DENSITY')
+    radius = number(deck, 'BODIES', 'RADIUS')
+    drive = number(deck, 'BODIES', 'DRIVING_FORCE')
+    lengths = [number(deck, 'GRID', f'LENGTH_{c}') for c in 'XYZ']
+    cells = int(deck['GRID']['NX'][0])
+    phi = 4.0 / 3.0 * math.pi * radius**3 / math.prod(lengths)
+    near = min(ZICK_HOMSY, key=lambda p: abs(p - phi))
+    if abs(phi / near - 1) > 1e-3:
+        raise SystemExit(f'check_deck: phi = {phi:.4f} is not one of Zick & Homsy\'s {sorted(ZICK_HOMSY)}')
+    with last_field(run) as fields:
+        u = fields['fields/u'][()]   # (nz, ny, nx): u[:, :, nx - 1] is the plane i = nx
+    velocity = u[:, :, -1].mean()
+    force = drive * math.prod(lengths)
+    k = force / (6 * math.pi * mu * radius * velocity)
+    loads = read_loads(run)
+    load = loads[-1, 3]
+    print(f'sphere_array: D/dx {2 * radius / (lengths[0] / cells):.2f}, U = {velocity:.10e} m/s, '
+          f'K = {k:.16g}, steps {int(loads[-1, 0])}, load / (f L^3) - 1 = {load / force - 1:.2e}', file=sys.stderr)
+    reference = ZICK_HOMSY[near]
+    error = k / reference - 1
+    tolerance = 0.05
+    # At steady state the momentum-balance load equals the drive on the cell, f L^3.
+    steady = abs(load / force - 1) < 1e-6
+    return row(f'sphere array, phi = {near}, D/dx {2 * radius * cells / lengths[0]:.2f}',
+               f'K = {reference} (Zick & Homsy 1982, Table 2)', f'K = {k:.4f}', f'{100 * error:+.2f}%',
+               f'5% (load = f L^3 to 1e-6: {"yes" if steady else "no"})', abs(error) <= tolerance and steady)
+
+
+def rotating(runs):
+    x, y = [], []
+    for run in runs:
+        deck = read_namelist(Path(run) / 'run.nml')
+        mu = number(deck, 'FLUID', 'VISCOSITY') * number(deck, 'FLUID', 'DENSITY')
+        radius = number(deck, 'BODIES', 'RADIUS')
+        omega = number(deck, 'BODIES', 'ANGULAR_VELOCITY', 2)
+        length = number(deck, 'GRID', 'LENGTH_X')
+        cells = int(deck['GRID']['NX'][0])
+        torque = read_loads(run)[-1, 8]
+        ratio = -torque / (8 * math.pi * mu * radius**3 * omega)
+        print(f'rotating: {cells}^3, D/dx {2 * radius * cells / length:.2f}, a/L {radius / length:.4f}, '
+              f'T / (8 pi mu a^3 Omega) = {ratio:.8f}', file=sys.stderr)
+        x.append((radius / length)**3)
+        y.append(ratio)
+    slope, unbounded = np.polyfit(x, y, 1)
+    print(f'rotating: extrapolated {unbounded:.8f}, slope {slope:.4f}', file=sys.stderr)
+    error = unbounded - 1
+    tolerance = 0.05
+    boxes = ', '.join(f'{1 / (2 * math.cbrt(v)):.0f}' for v in x)
+    return row(f'rotating sphere, D/dx {2 * radius * cells / length:.2f}, boxes L/D = {boxes}',
+               'T = 8 pi mu a^3 Omega (Stokes)', f'T / (8 pi mu a^3 Omega) = {unbounded:.4f} (extrapolated)',
+               f'{100 * error:+.2f}%', '5%', abs(error) <= tolerance)
+
+
+def stokes_oscillating_force(radius, omega, velocity, box_length, mu, rho):
+    """Stokes' force for the velocity velocity e^{i omega t}, with the periodic box's mean-flow
+    correction F = -S U / (1 + S / (i omega M) + rho V / M), M = rho (L^3 - V) (box_length > 0)."""
+    nu = mu / rho
+    lam = (1 + 1j) * math.sqrt(omega / (2 * nu))
+    s = 6 * math.pi * mu * radius * (1 + lam * radius + lam**2 * radius**2 / 9)
+    force = -s * velocity
+    if box_length > 0:
+        volume = 4 / 3 * math.pi * radius**3
+        fluid_mass = rho * (box_length**3 - volume)
+        force = force / (1 + s / (1j * omega * fluid_mass) + rho * volume / fluid_mass)
+    return force
+
+
+def oscillating(runs):
+    run = runs[0]
+    deck = read_namelist(Path(run) / 'run.nml')
+    rho = number(deck, 'FLUID', 'DENSITY')
+    mu = number(deck, 'FLUID', 'VISCOSITY') * rho
+    radius = number(deck, 'BODIES', 'RADIUS')
+    amplitude = number(deck, 'BODIES', 'OSCILLATION_AMPLITUDE')
+    frequency = number(deck, 'BODIES', 'OSCILLATION_FREQUENCY')
+    length = number(deck, 'GRID', 'LENGTH_X')
+    dt = number(deck, 'RUN', 'DT')
+    loads = read_loads(run)
+    steps = loads[:, 0].astype(int)
+    force = loads[:, 3]
+    omega = 2 * math.pi * frequency
+    per_period = round(1 / (frequency * dt))
+    if abs(per_period * dt * frequency - 1) > 1e-9 or len(steps) < per_period + 2:
+        raise SystemExit('check_deck: oscillating needs dt = period / whole number and at least one period')
+    last = slice(len(steps) - per_period, len(steps))
+    t = (steps[last] - 0.5) * dt
+    a = 2 * np.sum(force[last] * np.cos(omega * t)) / per_period
+    b = 2 * np.sum(force[last] * np.sin(omega * t)) / per_period
+    measured = complex(a, -b)
+    reference = stokes_oscillating_force(radius, omega, amplitude * omega, length, mu, rho)
+    error = abs(measured) / abs(reference) - 1
+    phase = math.degrees(np.angle(measured / reference))
+    print(f'oscillating: |F| = {abs(measured):.10e} N, reference {abs(reference):.10e} N, amplitude error '
+          f'{100 * error:.4f}%, phase {phase:.4f} deg, {len(steps) // per_period} periods of {per_period} steps',
+          file=sys.stderr)
+    return row(f'oscillating sphere, D/dx {2 * radius / (length / int(deck["GRID"]["NX"][0])):.1f}, L = '
+               f'{length / radius:.0f} R, A = {amplitude / radius:.3f} R',
+               'Stokes 1851 with the box correction (Landau & Lifshitz §24)',
+               f'amplitude {abs(measured):.4e} N, phase {phase:+.2f} deg', f'{100 * error:+.2f}%',
+               '3%, phase 4 deg', abs(error) <= 0.03 and abs(phase) <= 4.0)
+
+
+CASES = {'sphere_array': sphere_array, 'rotating': rotating, 'oscillating': oscillating}
+
+if __name__ == '__main__':
+    if len(sys.argv) < 3 or sys.argv[1] not in CASES:
+        print(__doc__, file=sys.stderr)
+        sys.exit(2)
+    sys.exit(CASES[sys.argv[1]](sys.argv[2:]))
