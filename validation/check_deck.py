@@ -25,6 +25,11 @@ oscillating   one run of a sphere oscillating along x, c0 + A sin(omega t): the 
               translational oscillation (Landau & Lifshitz, Fluid Mechanics, section 24, problem 5)
               with the periodic box's mean-flow correction; error of the amplitude (the phase is
               printed beside it and held to 4 degrees).
+settling      one run of a free sphere settling under gravity in the periodic cube (&scene particles =
+              'free', &pair gravity): at the last step K = W / (6 pi mu a U_s), W = (rho_p - rho_f) V g
+              the net weight, U_s = U_p - U_face the slip (U_p from particles.h5, U_face the flux
+              through the box's x-face i = nx over its area, from the last field snapshot), against
+              Zick & Homsy (1982) as for sphere_array, within 1% (test_free_settling's bound).
 """
 import math
 import re
@@ -192,7 +197,42 @@ def oscillating(runs):
                '3%, phase 4 deg', abs(error) <= 0.03 and abs(phase) <= 4.0)
 
 
-CASES = {'sphere_array': sphere_array, 'rotating': rotating, 'oscillating': oscillating}
+def settling(runs):
+    run = runs[0]
+    deck = read_namelist(Path(run) / 'run.nml')
+    rho = number(deck, 'FLUID', 'DENSITY')
+    mu = number(deck, 'FLUID', 'VISCOSITY') * rho
+    radius = number(deck, 'BODIES', 'RADIUS')
+    density = number(deck, 'PAIR', 'DENSITY')
+    gravity = np.array([number(deck, 'PAIR', 'GRAVITY', i) for i in range(3)])
+    lengths = [number(deck, 'GRID', f'LENGTH_{c}') for c in 'XYZ']
+    cells = int(deck['GRID']['NX'][0])
+    volume = 4.0 / 3.0 * math.pi * radius**3
+    phi = volume / math.prod(lengths)
+    near = min(ZICK_HOMSY, key=lambda p: abs(p - phi))
+    if abs(phi / near - 1) > 1e-3 or gravity[1] != 0 or gravity[2] != 0:
+        raise SystemExit(f'check_deck: settling needs phi of Zick & Homsy ({sorted(ZICK_HOMSY)}) and gravity along x')
+    weight = (density - rho) * volume * gravity[0]
+    with h5py.File(Path(run) / 'particles.h5', 'r') as particles:
+        particle_time = particles['time'][-1]
+        velocity = particles['particle1/velocity'][-1]
+    with last_field(run) as fields:
+        field_time = fields['time'][()]
+        face = fields['fields/u'][()][:, :, -1].mean()
+    if abs(particle_time - field_time) > 1e-9 * field_time:
+        raise SystemExit(f'check_deck: particles.h5 ends at t = {particle_time}, the last field at {field_time}')
+    slip = velocity[0] - face
+    k = weight / (6 * math.pi * mu * radius * slip)
+    print(f'settling: D/dx {2 * radius * cells / lengths[0]:.2f}, U_p = {velocity[0]:.10e}, U_face = {face:.10e}, '
+          f'slip = {slip:.16g} m/s, K = {k:.16g}', file=sys.stderr)
+    reference = ZICK_HOMSY[near]
+    error = k / reference - 1
+    return row(f'settling sphere, phi = {near}, D/dx {2 * radius * cells / lengths[0]:.2f}, '
+               f'rho_p/rho_f {density / rho:.2f}', f'K = {reference} (Zick & Homsy 1982, Table 2)',
+               f'K = {k:.4f}', f'{100 * error:+.2f}%', '1%', abs(error) <= 0.01)
+
+
+CASES = {'sphere_array': sphere_array, 'rotating': rotating, 'oscillating': oscillating, 'settling': settling}
 
 if __name__ == '__main__':
     if len(sys.argv) < 3 or sys.argv[1] not in CASES:

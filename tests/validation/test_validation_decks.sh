@@ -1,18 +1,20 @@
 #!/usr/bin/env bash
-# checks: 6
+# checks: 8
 # The validation decks run through agglo itself (validation/run.sh: validation/decks/*.nml, checked by
 # validation/check_deck.py; docs/validation.md):
 #  - each case within the tolerance its check states: the sphere array at D/dx 8.06 against Zick &
 #    Homsy (1982, J. Fluid Mech. 115, 13, Table 2) K = 4.292 within 5%, the rotating sphere at D/dx 8
 #    extrapolated from three boxes against Stokes' 8 pi mu a^3 Omega within 5%, the oscillating sphere
-#    against Stokes (1851) with the box correction within 3% and 4 degrees;
+#    against Stokes (1851) with the box correction within 3% and 4 degrees, the free sphere settling
+#    under gravity (&scene particles = 'free', &pair gravity) against Zick & Homsy within 1%;
 #  - each deck reproduces the figure of the Fortran case it replaces (validation/*_case.f90, the
 #    same settings): the array's K = 4.2793540430307484 of test_immersed_stokes to 1e-12 relative (the
 #    same superficial velocity bit for bit); the rotating sphere's extrapolated torque ratio 0.96598 of bench_immersed_ladder
 #    rotating:8:implicit to 1e-5; the oscillating sphere's force amplitude within 0.3% of the
 #    1.4353547e-8 N of test_immersed_oscillating (the deck starts at t = 0 at full speed, the case at
 #    rest at T/4: the impulsive start leaves a mean flow in the box that decays over about nine
-#    periods; measured +0.14%).
+#    periods; measured +0.14%); the settling sphere's K = 4.2792963313569850 of test_free_settling to
+#    1e-12 relative (the same slip bit for bit).
 # Prints PASS/FAIL lines; the runs go to a temporary directory.
 set -u
 here=$(cd "$(dirname "$0")" && pwd)
@@ -27,7 +29,7 @@ fail() { echo "FAIL validation_decks/$1 $2"; }
 value() { sed -n "s/.*$2 = \([-+0-9.eE]*\).*/\1/p" "$work/$1.check.log" | tail -n 1; }
 within() { awk -v a="$1" -v b="$2" -v t="$3" 'BEGIN { d = (a - b) / b; if (d < 0) d = -d; exit !(d <= t) }'; }
 
-for c in sphere_array rotating oscillating; do
+for c in sphere_array rotating oscillating settling; do
   table=$(bash "$repo/validation/run.sh" "$c"); status=$?
   row=$(printf '%s\n' "$table" | tail -n 1)
   if [ $status -eq 0 ]; then
@@ -49,3 +51,7 @@ else fail rotating_equals_fortran_case "ratio = '$ratio', expected 0.96598"; fi
 amplitude=$(sed -n 's/^oscillating: |F| = \([-+0-9.eE]*\) N.*/\1/p' "$work/oscillating.check.log")
 if [ -n "$amplitude" ] && within "$amplitude" 1.4353547e-8 3e-3; then pass oscillating_near_fortran_case
 else fail oscillating_near_fortran_case "|F| = '$amplitude' N, expected 1.4353547e-8 N within 0.3%"; fi
+
+k=$(value settling K)
+if [ -n "$k" ] && within "$k" 4.2792963313569850 1e-12; then pass settling_equals_fortran_case
+else fail settling_equals_fortran_case "K = '$k', expected 4.2792963313569850"; fi
