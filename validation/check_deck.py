@@ -30,6 +30,13 @@ settling      one run of a free sphere settling under gravity in the periodic cu
               the net weight, U_s = U_p - U_face the slip (U_p from particles.h5, U_face the flux
               through the box's x-face i = nx over its area, from the last field snapshot), against
               Zick & Homsy (1982) as for sphere_array, within 1% (test_free_settling's bound).
+released      one run of a free sphere started at U_0 along x in fluid at rest: U_p(t) / U_0 of every
+              fluid step (particles.h5) against the unsteady Stokes decay with added mass and Basset
+              history (Maxey & Riley 1983, Phys. Fluids 26, 883; docs/theory.md, "A sphere released
+              in fluid at rest"), U(0+) = m U_0 / (m + m_f / 2), evaluated from its closed Laplace
+              transform (Basset 1888) on Talbot's contour (Abate & Valko 2004): the largest
+              |U_p - U_ref| / U_0 over the run, U_p / U_ref - 1 over [0.05 tau_p, end] and the distance
+              travelled, each within 5% (test_free_release's bounds).
 """
 import math
 import re
@@ -232,7 +239,69 @@ def settling(runs):
                f'K = {k:.4f}', f'{100 * error:+.2f}%', '1%', abs(error) <= 0.01)
 
 
-CASES = {'sphere_array': sphere_array, 'rotating': rotating, 'oscillating': oscillating, 'settling': settling}
+def release_decay(time, radius, density, fluid_density, mu, terms=24):
+    """U(t) / U(0+) of the released sphere: the inverse of U~(s) / U(0+) = 1 / (s + gamma sqrt(pi) sqrt(s)
+    + beta), beta = 6 pi mu a / m_e, gamma = 6 a^2 sqrt(pi rho_f mu) / m_e, m_e = (rho_p + rho_f / 2) V
+    (Basset 1888; Maxey & Riley 1983), on Talbot's fixed contour with terms nodes (Abate & Valko 2004,
+    Int. J. Numer. Meth. Eng. 60, 979); time > 0."""
+    effective_mass = (density + 0.5 * fluid_density) * 4.0 / 3.0 * math.pi * radius**3
+    beta = 6 * math.pi * mu * radius / effective_mass
+    gamma = 6 * radius**2 * math.sqrt(math.pi * fluid_density * mu) / effective_mass
+
+    def transform(s):
+        return 1 / (s + gamma * math.sqrt(math.pi) * np.sqrt(s) + beta)
+
+    r = 2 * terms / (5 * time)
+    total = 0.5 * np.exp(r * time) * transform(complex(r, 0)).real
+    for k in range(1, terms):
+        theta = k * math.pi / terms
+        cot = math.cos(theta) / math.sin(theta)
+        s = r * theta * complex(cot, 1)
+        sigma = theta + (theta * cot - 1) * cot
+        total += (np.exp(time * s) * transform(s) * complex(1, sigma)).real
+    return total * r / terms
+
+
+def released(runs):
+    run = runs[0]
+    deck = read_namelist(Path(run) / 'run.nml')
+    rho = number(deck, 'FLUID', 'DENSITY')
+    mu = number(deck, 'FLUID', 'VISCOSITY') * rho
+    radius = number(deck, 'BODIES', 'RADIUS')
+    density = number(deck, 'PAIR', 'DENSITY')
+    start = number(deck, 'BODIES', 'VELOCITY')
+    length = number(deck, 'GRID', 'LENGTH_X')
+    cells = int(deck['GRID']['NX'][0])
+    if any(number(deck, 'PAIR', 'GRAVITY', i) != 0 for i in range(3)):
+        raise SystemExit('check_deck: released needs no gravity')
+    with h5py.File(Path(run) / 'particles.h5', 'r') as particles:
+        time = particles['time'][()]
+        velocity = particles['particle1/velocity'][:, 0] / start
+    tau = 2 * density * radius**2 / (9 * mu)
+    jump = density / (density + 0.5 * rho)   # U(0+) / U_0
+    reference = np.array([1.0] + [jump * release_decay(t, radius, density, rho, mu) for t in time[1:]])
+    largest = np.max(np.abs(velocity[1:] - reference[1:]))
+    late = time >= 0.05 * tau
+    late_relative = np.max(np.abs(velocity[late] / reference[late] - 1))
+    # Distance by the trapezoid rule; the first interval from U(0+) (the jump is instantaneous).
+    dt = np.diff(time)
+    travelled = np.sum(0.5 * (velocity[:-1] + velocity[1:]) * dt) + 0.5 * (jump - 1) * dt[0]
+    expected = np.sum(0.5 * (reference[:-1] + reference[1:]) * dt) + 0.5 * (jump - 1) * dt[0]
+    displacement = travelled / expected - 1
+    print(f'released: D/dx {2 * radius * cells / length:.2f}, L/D {length / (2 * radius):.1f}, {len(time) - 1} rows '
+          f'to t / tau_p = {time[-1] / tau:.4f}; U_p/U_0 rows 1-3 {velocity[1]:.16g} {velocity[2]:.16g} '
+          f'{velocity[3]:.16g} (reference {reference[1]:.6f} {reference[2]:.6f} {reference[3]:.6f}); '
+          f'last U_p/U_0 = {velocity[-1]:.16g}; max |U_p - U_ref| / U_0 = {largest:.6f}, '
+          f'late relative {late_relative:.6f}, displacement {displacement:+.6f}', file=sys.stderr)
+    inside = largest <= 0.05 and late_relative <= 0.05 and abs(displacement) <= 0.05
+    return row(f'released sphere, D/dx {2 * radius * cells / length:.1f}, L = {length / (2 * radius):.0f} D, '
+               f'rho_p/rho_f {density / rho:.2f}, over tau_p',
+               'unsteady Stokes with added mass and history (Maxey & Riley 1983)',
+               f'max U_p/U_0 - ref {100 * largest:.2f}%, late {100 * late_relative:.2f}%, '
+               f'distance {100 * displacement:+.2f}%', f'{100 * largest:.2f}% of U_0', '5% each', inside)
+
+
+CASES = {'sphere_array': sphere_array, 'rotating': rotating, 'oscillating': oscillating, 'settling': settling, 'released': released}
 
 if __name__ == '__main__':
     if len(sys.argv) < 3 or sys.argv[1] not in CASES:

@@ -7,7 +7,7 @@
 #
 # Cases: sphere_array (D/dx 8, Zick & Homsy 1982), rotating (D/dx 8 in three boxes, 8 pi mu a^3
 # Omega), oscillating (Stokes 1851 with the box correction), settling (a free sphere under gravity,
-# Zick & Homsy 1982). Environment: AGGLO (the executable,
+# Zick & Homsy 1982), released (a free sphere started at U_0, unsteady Stokes). Environment: AGGLO (the executable,
 # default build/agglo), AGGLO_PYTHON (default .venv/bin/python: h5py, numpy), VALIDATION_OUT (the
 # runs' directories, default build/validation-decks; each run replaces its earlier one), MPIRUN
 # (default `mpirun --oversubscribe`). Exit status: the number of cases outside their tolerance (or
@@ -22,11 +22,13 @@ export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 decks=$repo/validation/decks
 
 # case: check name, ranks, decks
-declare -A check=([sphere_array]=sphere_array [rotating]=rotating [oscillating]=oscillating [settling]=settling)
-declare -A ranks=([sphere_array]=1 [rotating]=1 [oscillating]=1 [settling]=1)
+declare -A check=([sphere_array]=sphere_array [rotating]=rotating [oscillating]=oscillating [settling]=settling
+                   [released]=released)
+declare -A ranks=([sphere_array]=1 [rotating]=1 [oscillating]=1 [settling]=1 [released]=1)
 declare -A deck_list=([sphere_array]='sphere_array_d8' [oscillating]='oscillating_sphere' [settling]='settling_sphere'
+                      [released]='released_sphere'
                       [rotating]='rotating_sphere_d8_box2 rotating_sphere_d8_box3 rotating_sphere_d8_box4')
-order=(sphere_array rotating oscillating settling)
+order=(sphere_array rotating oscillating settling released)
 
 cases=("$@"); [ ${#cases[@]} -eq 0 ] && cases=("${order[@]}")
 [ -x "$agglo" ] || { echo "validation/run.sh: no executable $agglo (make build)" >&2; exit 2; }
