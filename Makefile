@@ -104,7 +104,7 @@ else
   Q = @echo "  $(notdir $@)";
 endif
 
-.PHONY: help deps build run test bench validate clean tools-deps
+.PHONY: help deps build run test bench validate validate-decks clean tools-deps
 .SECONDARY:
 help: ## list the targets
 	@echo "Agglo - make targets (MODE=release|debug, ARCH=native|x86-64-v3|..., BUILD=dir, NP=ranks, DECK=deck for run):"
@@ -214,6 +214,10 @@ validate: deps ## run the immersed-boundary validation ladder (the table in docs
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_free_squeeze pressure=non_incremental 8 32 0.1 0 0.5 0.75 1
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_free_cn
 	AGGLO=$(abspath $(BUILD))/agglo EXTREMES=long bash tests/mpi/test_resolved_extremes.sh
+	@$(MAKE) --no-print-directory validate-decks
+
+validate-decks: build ## run the validation decks through agglo and check them (validation/run.sh: one table row per case)
+	AGGLO=$(abspath $(BUILD))/agglo VALIDATION_OUT=$(abspath $(BUILD))/validation-decks MPIRUN='$(MPIRUN)' bash validation/run.sh
 
 clean: ## remove the build directory
 	rm -rf $(BUILD)

@@ -302,6 +302,10 @@ contains
     integer, intent(in) :: collisions
     character(len=:), allocatable :: text
     integer :: p, closest
+    if (size(system%pairs) == 0) then   ! a single body: no gap to report
+      text = '  bodies: 1, no pair  collisions = '//int_text(collisions)
+      return
+    end if
     closest = 1
     do p = 2, size(system%pairs)
       if (system%pairs(p)%contact%gap < system%pairs(closest)%contact%gap) closest = p
