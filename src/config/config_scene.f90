@@ -9,7 +9,7 @@ module config_scene
   type :: scene_config_t
     character(len=16) :: fluid = 'resolved'       !< 'none' | 'stokes' | 'resolved'
     !> 'none' | 'pair' | 'prescribed' (&bodies, resolved fluid) | 'free' (free bodies placed by &bodies,
-    !> resolved fluid)
+    !> resolved fluid) | 'suspension' (free bodies placed at random by &suspension, any fluid)
     character(len=16) :: particles = 'none'
     character(len=16) :: forcing = 'none'         !< 'none' | 'eswaran_pope' (resolved fluid only)
     character(len=16) :: ibm_coupling = 'implicit' !< 'implicit' | 'explicit' (resolved fluid with particles)
@@ -61,7 +61,8 @@ contains
   subroutine check_scene_group(cfg)
     type(scene_config_t), intent(in) :: cfg
     call require_option('scene', 'fluid', cfg%fluid, [character(len=8) :: 'none', 'stokes', 'resolved'])
-    call require_option('scene', 'particles', cfg%particles, [character(len=10) :: 'none', 'pair', 'prescribed', 'free'])
+    call require_option('scene', 'particles', cfg%particles, &
+                        [character(len=10) :: 'none', 'pair', 'prescribed', 'free', 'suspension'])
     call require_option('scene', 'forcing', cfg%forcing, [character(len=12) :: 'none', 'eswaran_pope'])
     call require_option('scene', 'ibm_coupling', cfg%ibm_coupling, [character(len=8) :: 'implicit', 'explicit'])
     call require_positive_int('scene', 'particle_substeps', cfg%particle_substeps)
