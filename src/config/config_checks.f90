@@ -249,6 +249,9 @@ contains
           real_text(cfg%suspension%min_gap), '> &collision detection_floor = '// &
           real_text(cfg%collision%detection_floor)//' m (a body placed within it collides at the first step)')
     end if
+    if (cfg%suspension%ghost .and. cfg%collision%lubrication) call input_error('suspension', 'ghost', &
+        '.true. with &collision lubrication = .true.', '.false., or lubrication = .false. (ghost bodies pass '// &
+        'through each other; a lubrication force would act between them)')
     if (cfg%suspension%ghost .and. .not. cfg%scene%collisions) call input_error('suspension', 'ghost', &
         '.true. with &scene collisions = .false.', '.false., or &scene collisions = .true. (ghost mode counts '// &
         'the collisions the collision test detects)')

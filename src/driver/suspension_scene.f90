@@ -160,13 +160,19 @@ contains
                                   velocities(:, i))
     end do
     models = particle_models_of(cfg)
+    ! Ghost mode: the collisions counted, no impulse and no DLVO (the bodies pass through each other).
+    if (cfg%suspension%ghost) then
+      models%ghost = .true.
+      models%dlvo = .false.
+    end if
     ! The pair work of a suspension is local: only pairs within the models' reach are evaluated.
     models%interaction_gap = particle_interaction_gap(models)
     call particle_system_create(system, shapes, bodies, models, box_length=box)
     call log_line('suspension: '//int_text(n)//' bodies ('//int_text(size(counts))//' species) of density '// &
         scientific_text(cfg%pair%density)//' kg/m^3, volume fraction '//real_text(placement%volume_fraction)// &
         ', placed after '//int_text(placement%attempts)//' tries ('//int_text(placement%exact_gaps)// &
-        ' exact gaps), min_gap '//scientific_text(cfg%suspension%min_gap)//' m; pair work within '// &
+        ' exact gaps), min_gap '//scientific_text(cfg%suspension%min_gap)//' m'// &
+        trim(merge('; ghost collisions', '                  ', models%ghost))//'; pair work within '// &
         scientific_text(models%interaction_gap)//' m; memory estimate '// &
         scientific_text(estimate / 2.0_wp**20)//' MiB')
   end subroutine place_suspension
