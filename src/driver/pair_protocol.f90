@@ -34,7 +34,7 @@ module pair_protocol
   use particle_output, only: particle_output_t, pair_run_metadata_t, particle_record_t, pair_record_t, &
                              collision_event_t, run_summary_t, particle_output_open, &
                              particle_output_continue, particle_output_flush, particle_output_rows, &
-                             append_particles_sample, append_collision_event
+                             append_particles_sample, append_bodies_sample, append_collision_event
   implicit none
   private
   public :: pair_loop_t, setup_system, record_interaction, run_finished, sampled, write_sample, finish_summary, &
@@ -264,21 +264,21 @@ contains
         system%pairs(the_pair)%dlvo%chi_eta)
   end function current_outcome
 
-  !> One row of particles.h5: every body, and every pair record unless pairs = .false. (a
-  !> suspension, whose near pairs change from step to step).
-  subroutine write_sample(output, time, system, hydrodynamic, pairs)
+  !> One row of particles.h5: every body and every pair record; with bodies_layout = .true. (a
+  !> suspension, whose near pairs change from step to step) every body in the bodies layout, no pairs.
+  subroutine write_sample(output, time, system, hydrodynamic, bodies_layout)
     type(particle_output_t), intent(inout) :: output
     real(wp), intent(in) :: time
     type(particle_system_t), intent(in) :: system
     type(particle_loads_t), intent(in) :: hydrodynamic
-    logical, intent(in), optional :: pairs
+    logical, intent(in), optional :: bodies_layout
     type(particle_record_t), allocatable :: records(:)
     type(pair_record_t), allocatable :: pair_records(:)
     integer :: i, p, written_pairs
-    written_pairs = size(system%pairs)
-    if (present(pairs)) then
-      if (.not. pairs) written_pairs = 0
-    end if
+    logical :: bodies
+    bodies = .false.
+    if (present(bodies_layout)) bodies = bodies_layout
+    written_pairs = merge(0, size(system%pairs), bodies)
     allocate(records(system%n), pair_records(written_pairs))
     do i = 1, system%n
       records(i) = particle_record_t(position=system%bodies(i)%position, quaternion=system%bodies(i)%quaternion, &
@@ -294,7 +294,11 @@ contains
             relative_velocity=normal_approach_speed(system, p), vdw_force=abs(pair%dlvo%vdw_force))
       end associate
     end do
-    call append_particles_sample(output, time, records, pair_records)
+    if (bodies) then
+      call append_bodies_sample(output, time, records)
+    else
+      call append_particles_sample(output, time, records, pair_records)
+    end if
   end subroutine write_sample
 
   !> Normal approach speed of the closest points of pair p, > 0 approaching.

@@ -205,11 +205,11 @@ contains
           ! test is repeated (the continued run's deck may set a later end).
           finished = end_rule()
           if (finished .and. .not. sampled(cfg, loop%step)) call write_sample(output, loop%time, system, hydrodynamic, &
-                                                                            pairs=.not. with_suspension)
+                                                                            bodies_layout=with_suspension)
         else
           call record_interaction(cfg, system, loop, output, summary)
           call felt_loads(0.0_wp)
-          call write_sample(output, loop%time, system, hydrodynamic, pairs=.not. with_suspension)
+          call write_sample(output, loop%time, system, hydrodynamic, bodies_layout=with_suspension)
           finished = with_fluid .and. end_rule()
         end if
       else
@@ -291,12 +291,12 @@ contains
         ! The loads of the new state: the next sub-step's, and the sample's.
         call felt_loads(real(substep, wp) / substeps)
         if (sampled(cfg, loop%step)) call write_sample(output, loop%time, system, hydrodynamic, &
-                                                       pairs=.not. with_suspension)
+                                                       bodies_layout=with_suspension)
       end do
       call timer_toc(context%timers%particles)
       finished = end_rule()
       if (finished .and. .not. sampled(cfg, loop%step)) call write_sample(output, loop%time, system, hydrodynamic, &
-                                                                          pairs=.not. with_suspension)
+                                                                          bodies_layout=with_suspension)
     end subroutine particle_substeps
 
     !> The pair's end rule (module pair_protocol) at the loop's step; free bodies end at &run

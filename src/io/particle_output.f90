@@ -32,6 +32,7 @@ module particle_output
             run_summary_t, particle_output_open, particle_output_continue, particle_output_close, &
             particle_output_flush, particle_output_rows, &
             sample_value, sample_end, event_value, event_end, append_pair_sample, append_particles_sample, &
+            append_bodies_sample, &
             append_collision_event, &
             write_summary_json, collision_event_columns
 
@@ -423,6 +424,31 @@ contains
     end do
     call sample_end(out)
   end subroutine append_particles_sample
+
+  !> One row of the time series of a suspension (N bodies, one dataset per quantity): /time and
+  !> /suspension/<quantity> of width 3 N (4 N for the quaternion), body after body, so h5py reads
+  !> f['suspension/position'][:].reshape(rows, N, 3). Ten datasets for any N (not ten per body).
+  subroutine append_bodies_sample(out, time, particles)
+    type(particle_output_t), intent(inout) :: out
+    real(wp), intent(in) :: time
+    type(particle_record_t), intent(in) :: particles(:)
+    integer :: n, k
+    if (.not. out%active) return
+    out%pair_layout = .true.
+    n = size(particles)
+    call sample_value(out, 'time', time)
+    call sample_value(out, 'suspension/position', [(particles(k)%position, k = 1, n)])
+    call sample_value(out, 'suspension/quaternion', [(particles(k)%quaternion, k = 1, n)])
+    call sample_value(out, 'suspension/velocity', [(particles(k)%velocity, k = 1, n)])
+    call sample_value(out, 'suspension/angular_velocity', [(particles(k)%angular_velocity, k = 1, n)])
+    call sample_value(out, 'suspension/force_hydrodynamic', [(particles(k)%force_hydrodynamic, k = 1, n)])
+    call sample_value(out, 'suspension/force_dlvo', [(particles(k)%force_dlvo, k = 1, n)])
+    call sample_value(out, 'suspension/force_collision', [(particles(k)%force_collision, k = 1, n)])
+    call sample_value(out, 'suspension/torque_hydrodynamic', [(particles(k)%torque_hydrodynamic, k = 1, n)])
+    call sample_value(out, 'suspension/torque_dlvo', [(particles(k)%torque_dlvo, k = 1, n)])
+    call sample_value(out, 'suspension/torque_collision', [(particles(k)%torque_collision, k = 1, n)])
+    call sample_end(out)
+  end subroutine append_bodies_sample
 
   !> One row of the events table (/events/<collision_event_columns>, and the bodies with more than two).
   subroutine append_collision_event(out, event)

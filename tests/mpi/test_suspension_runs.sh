@@ -2,7 +2,9 @@
 # The suspension scene (&scene particles = 'suspension'; docs/scenes.md, "Suspension"), with $AGGLO:
 #  - the smallest suspension deck (input/suspension_sphere_none.nml: 95 calcite spheres, 5% by
 #    volume, in vacuum, 10 mm/s rms) for 4000 steps: collisions happen (the log counts them and
-#    particles.h5 has their events), and no two bodies overlap at the samples' near pairs;
+#    particles.h5 has their events), particles.h5 holds every body in the suspension layout
+#    (/suspension/position of 3 x 95 values per row, a row every 500 steps), and no two bodies
+#    overlap at the last sample;
 #  - restart: 2000 steps + &run restart to 4000 give the 4000-step particles.h5 and last
 #    checkpoint bit for bit (h5diff without tolerance): the same placement, the same collisions;
 #  - 1 and 2 ranks, point particles in a random resolved field (16^3): the same placement (the
@@ -37,7 +39,7 @@ import sys, h5py, numpy as np
 f = h5py.File(sys.argv[1], 'r')
 events = len(f['events/time'])
 rows = len(f['time'])
-x = np.array([f[f'particle{n}/position'][-1] for n in range(1, 96)])
+x = f['suspension/position'][-1].reshape(95, 3)
 d = x[:, None, :] - x[None, :, :]
 d -= 1.0e-3 * np.round(d / 1.0e-3)
 r = np.sqrt((d**2).sum(-1)) + np.eye(95)
@@ -69,7 +71,8 @@ mpirun -np 2 "$AGGLO" point.nml --set "output.directory='two'" > two.out 2>&1
 import h5py, numpy as np
 try:
     a, b = h5py.File('one/particles.h5', 'r'), h5py.File('two/particles.h5', 'r')
-    get = lambda f, q: np.array([f[f'particle{n}/{q}'][:] for n in range(1, 21)])
+    # (body, row, component), from the suspension layout (rows, 3 N) or (rows, 4 N)
+    get = lambda f, q: f[f'suspension/{q}'][:].reshape(len(f['time']), 20, -1).transpose(1, 0, 2)
     same = all((get(a, q)[:, 0] == get(b, q)[:, 0]).all() for q in ('position', 'quaternion'))
     v0 = get(a, 'velocity')[:, 0]
     # The random velocities have no net momentum; the fluid's at the centres (5 mm/s rms) adds some.
@@ -95,8 +98,8 @@ import sys, h5py, numpy as np
 counted = int(sys.argv[1])
 f = h5py.File('ghost/particles.h5', 'r')
 n, L, R, dt, steps = 191, 1.0e-3, 50.0e-6, 5.0e-7, 4000
-x0 = np.array([f[f'particle{k}/position'][0] for k in range(1, n + 1)])
-v = np.array([f[f'particle{k}/velocity'][:] for k in range(1, n + 1)])
+x0 = f['suspension/position'][0].reshape(n, 3)
+v = f['suspension/velocity'][:].reshape(len(f['time']), n, 3).transpose(1, 0, 2)
 unchanged = (v[:, -1] == v[:, 0]).all() and len(f['time']) == 2
 print(('PASS' if unchanged else 'FAIL') + ' suspension/ghost_velocities_and_momentum_unchanged')
 v = v[:, 0]
