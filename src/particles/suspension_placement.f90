@@ -1,7 +1,7 @@
 !> Random placement of a suspension in a periodic box (docs/theory.md, "Suspension placement"):
 !> random sequential addition. The bodies are placed one after the other, species by species in the
-!> order given; each try draws a uniform centre in the box and a uniform orientation (a uniform unit
-!> quaternion, Shoemake 1992) and is kept when its surface gap to every body already placed is at
+!> order given; each try draws a uniform centre in the box and a uniform orientation (quaternion
+!> random_orientation, Shoemake 1992) and is kept when its surface gap to every body already placed is at
 !> least min_gap, else drawn again, at most max_attempts times per body. The gap test of a try:
 !>   1. the placed bodies in the 27 cells around the try (a cell list of the placed centres, cells
 !>      no narrower than the largest bounding diameter plus min_gap, so no other body can be near);
@@ -15,14 +15,14 @@
 module suspension_placement
   use agglo_kinds, only: wp, i8
   use random_stream, only: random_stream_t, stream_uniform, stream_normal
-  use physical_constants, only: two_pi
+  use quaternion, only: random_orientation
   use periodic_box, only: image_shift
   use spheroid, only: spheroid_t
   use closest_points, only: closest_points_t, find_closest_points
   use broad_phase, only: near_pair
   implicit none
   private
-  public :: placement_t, place_bodies, uniform_quaternion, random_relative_velocities
+  public :: placement_t, place_bodies, random_relative_velocities
 
   !> What a placement reached: all bodies, or how far it got.
   type :: placement_t
@@ -36,18 +36,6 @@ module suspension_placement
   end type placement_t
 
 contains
-
-  !> A uniform random rotation: the unit quaternion of Shoemake (1992) from three uniform numbers,
-  !> uniform on the unit 3-sphere (scalar first).
-  function uniform_quaternion(stream) result(q)
-    type(random_stream_t), intent(inout) :: stream
-    real(wp) :: q(4), u(3)
-    u(1) = stream_uniform(stream)
-    u(2) = stream_uniform(stream)
-    u(3) = stream_uniform(stream)
-    q = [sqrt(1.0_wp - u(1)) * sin(two_pi * u(2)), sqrt(1.0_wp - u(1)) * cos(two_pi * u(2)), &
-         sqrt(u(1)) * sin(two_pi * u(3)), sqrt(u(1)) * cos(two_pi * u(3))]
-  end function uniform_quaternion
 
   !> Place the bodies of shapes (in order) in the periodic box (box, m) with surface gaps >= min_gap.
   !> Stops at the first body that max_attempts tries cannot place (placement%complete false).
@@ -83,7 +71,7 @@ contains
       do attempt = 1, max_attempts
         placement%attempts = placement%attempts + 1
         try_centre = [stream_uniform(stream), stream_uniform(stream), stream_uniform(stream)] * box
-        try_q = uniform_quaternion(stream)
+        try_q = random_orientation(stream)
         if (clear_of_placed(i, try_centre, try_q)) then
           accepted = .true.
           exit

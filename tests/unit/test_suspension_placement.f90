@@ -16,10 +16,10 @@ program test_suspension_placement
   use agglo_kinds, only: wp, i8
   use random_stream, only: random_stream_t, stream_seed
   use spheroid, only: spheroid_t, make_spheroid
-  use quaternion, only: rotate_to_lab
+  use quaternion, only: rotate_to_lab, random_orientation
   use closest_points, only: closest_points_t, find_closest_points
   use periodic_box, only: image_shift
-  use suspension_placement, only: placement_t, place_bodies, uniform_quaternion, random_relative_velocities
+  use suspension_placement, only: placement_t, place_bodies, random_relative_velocities
   use test_framework, only: test_start, test_finish, check
   implicit none
   real(wp), parameter :: r = 50.0e-6_wp, density = 2710.0_wp, gap = 2.0e-6_wp
@@ -63,7 +63,7 @@ program test_suspension_placement
   mean_square = 0
   n = 20000
   do i = 1, n
-    axis = rotate_to_lab(uniform_quaternion(stream), [1.0_wp, 0.0_wp, 0.0_wp])
+    axis = rotate_to_lab(random_orientation(stream), [1.0_wp, 0.0_wp, 0.0_wp])
     mean = mean + axis / n
     mean_square = mean_square + axis**2 / n
   end do
