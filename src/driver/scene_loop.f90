@@ -68,6 +68,9 @@ module scene_loop
 
   !> The pair's only pair in the system's pair list.
   integer, parameter :: the_pair = 1
+  !> The most bodies of a suspension whose surfaces the field snapshots hold (320 faces, about
+  !> 33 kB each: 1000 bodies add 33 MB to every snapshot).
+  integer, parameter :: surface_bodies_most = 1000
 
 contains
 
@@ -408,11 +411,13 @@ contains
       if (mod(loop_step(), int(cfg%output%checkpoint_interval, i8)) == 0) call checkpoint(last=.false.)
     end subroutine checkpoint_due
 
-    !> The fluid's snapshot, with the bodies' surfaces when there are bodies.
+    !> The fluid's snapshot, with the bodies' surfaces when there are bodies (a suspension of more
+    !> than surface_bodies_most bodies: the fluid alone; its bodies are in particles.h5).
     subroutine output_fields()
       type(body_pose_t), allocatable :: poses(:)
       call timer_tic(context%timers%fields)
-      call hydrodynamics%body_poses(solver, system, poses)
+      if (.not. (with_suspension .and. system%n > surface_bodies_most)) &
+        call hydrodynamics%body_poses(solver, system, poses)
       if (allocated(poses)) then
         call write_fluid_snapshot(solver, poses)
       else
