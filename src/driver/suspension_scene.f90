@@ -13,6 +13,7 @@ module suspension_scene
   use text_format, only: int_text, real_text
   use progress_meter, only: scientific_text
   use random_stream, only: random_stream_t, stream_seed
+  use parallel_env, only: global_max
   use config_suspension, only: species_count
   use spheroid, only: spheroid_t, make_spheroid
   use rigid_body, only: rigid_body_t, rigid_body_of_spheroid
@@ -71,7 +72,7 @@ contains
     per_body = per_body + 8.0_wp * 34                  ! one particles.h5 sample row
   end function suspension_memory_estimate
 
-  !> The memory the run may take (bytes): &suspension memory_limit (GiB), else the machine's
+  !> The memory the run may take (bytes): &suspension memory_limit (GiB), else this machine's
   !> available memory (MemAvailable of /proc/meminfo); huge() when neither is known.
   real(wp) function memory_limit_bytes(cfg, source)
     type(agglo_config_t), intent(in) :: cfg
@@ -121,7 +122,8 @@ contains
     box = [cfg%grid%length_x, cfg%grid%length_y, cfg%grid%length_z]
     counts = suspension_body_count(cfg)
     estimate = real(sum(counts), wp) * suspension_memory_estimate() + 16.0_wp * 2.0_wp**20
-    limit = memory_limit_bytes(cfg, source)
+    ! The smallest limit of the ranks (each reads its own machine's): every rank decides alike.
+    limit = -global_max(-memory_limit_bytes(cfg, source))
     if (estimate > limit .or. sum(counts) > huge(1) / 4) call input_error('suspension', 'count', &
         int_text(sum(counts))//' bodies in all', 'bodies whose estimated memory ('// &
         scientific_text(estimate / 2.0_wp**30)//' GiB: '//int_text(nint(suspension_memory_estimate()))// &
