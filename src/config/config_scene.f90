@@ -16,7 +16,7 @@ module config_scene
     logical :: dlvo = .true.                      !< DLVO forces between the particles
     logical :: collisions = .true.                !< hard-body collisions between the particles
     integer :: particle_substeps = 1              !< particle steps per fluid step (frozen loads)
-    !> How the free particles (the pair, or 'free' bodies) in the resolved fluid feel it: 'point'
+    !> How the free particles (the pair, 'free' bodies or a suspension) in the resolved fluid feel it: 'point'
     !> (analytic Stokes resistance in the flow at each centre, the fluid solved without the bodies) |
     !> 'resolved' (free particles resolved by the immersed boundary)
     character(len=16) :: particle_coupling = 'resolved'

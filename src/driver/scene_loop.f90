@@ -2,7 +2,8 @@
 !> decides which stages run, never which loop:
 !>   set-up       the fluid (&scene fluid = 'resolved': the initial field or the newest checkpoint,
 !>                the forcing, the statistics files), the particle system (&scene particles = 'pair':
-!>                the pair protocol's placement, module pair_protocol) and the particles'
+!>                the pair protocol's placement, module pair_protocol; 'free': the bodies of &bodies;
+!>                'suspension': the random placement of module suspension_scene) and the particles'
 !>                hydrodynamics provider (module particle_hydrodynamics: 'none', 'stokes', 'point',
 !>                'resolved', 'prescribed'), selected once here (module scene_setup);
 !>   per fluid step (with a fluid):
