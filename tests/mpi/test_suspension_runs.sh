@@ -10,14 +10,15 @@
 #  - 1 and 2 ranks, point particles in a random resolved field (16^3): the same placement (the
 #    first sample's positions and orientations bit for bit), start velocities with the fluid's at
 #    the centres (not the random ones alone), and after 4 fluid steps positions and velocities
-#    within 1e-9 relative of each other (round-off of the field's sums over the slabs);
+#    within 1e-9 relative of each other (round-off of the field's sums over the slabs); on 2 ranks
+#    2 fluid steps + &run restart to 4 give the 4-step particles.h5 and checkpoint bit for bit;
 #  - ghost mode (&suspension ghost): 191 spheres at 10%, 20 mm/s rms, 4000 steps: every body's
 #    velocity unchanged (bit for bit: no impulse, no DLVO), so the momentum is the start's; bodies
 #    pass through each other (a negative gap logged); the collisions counted are exactly the
 #    encounters an independent count finds on the straight-line trajectories x0 + v t (each pair's
 #    steps with 0 <= gap < v_n dt at the minimum image, v_n the normal approach speed), pair by pair.
 # Prints PASS/FAIL lines; works in a temporary directory.
-# checks: 7
+# checks: 8
 set -u
 AGGLO=${AGGLO:?AGGLO must be the agglo executable}
 root=$(cd "$(dirname "$0")/../.." && pwd)
@@ -67,6 +68,12 @@ cat > point.nml <<'NML'
 NML
 mpirun -np 1 "$AGGLO" point.nml --set "output.directory='one'" > one.out 2>&1
 mpirun -np 2 "$AGGLO" point.nml --set "output.directory='two'" > two.out 2>&1
+mpirun -np 2 "$AGGLO" point.nml --set "output.directory='twosplit'" --set run.max_steps=2 > split3.out 2>&1
+mpirun -np 2 "$AGGLO" point.nml --set "output.directory='twosplit'" --set run.restart=.true. > split4.out 2>&1
+if h5diff -q two/particles.h5 twosplit/particles.h5 && \
+   h5diff -q two/checkpoints/checkpoint_0000000004.h5 twosplit/checkpoints/checkpoint_0000000004.h5; then
+  echo "PASS suspension/point_restart_bit_for_bit  (2 + 2 fluid steps on 2 ranks: particles.h5 and the last checkpoint)"
+else echo "FAIL suspension/point_restart_bit_for_bit: $(grep -m1 error split4.out)"; fi
 "$python" - <<'PY'
 import h5py, numpy as np
 try:
