@@ -12,6 +12,7 @@ module agglo_config
   use namelist_text, only: namelist_item_t, read_namelist_items
   use error_handling, only: fatal
   use config_bodies, only: bodies_config_t, write_bodies_group
+  use config_suspension, only: suspension_config_t, write_suspension_group
   use file_system, only: longest_path
   implicit none
   private
@@ -28,12 +29,13 @@ module agglo_config
     type(dlvo_config_t) :: dlvo
     type(collision_config_t) :: collision
     type(bodies_config_t) :: bodies
+    type(suspension_config_t) :: suspension
     character(len=longest_path) :: deck_path = ''   !< the deck file this configuration came from
   end type agglo_config_t
 
   !> Every namelist group a deck may contain.
-  character(len=16), parameter :: deck_group_names(10) = [character(len=16) :: &
-      'run', 'scene', 'grid', 'fluid', 'forcing', 'pair', 'dlvo', 'collision', 'output', 'bodies']
+  character(len=16), parameter :: deck_group_names(11) = [character(len=16) :: &
+      'run', 'scene', 'grid', 'fluid', 'forcing', 'pair', 'dlvo', 'collision', 'output', 'bodies', 'suspension']
 
 contains
 
@@ -51,6 +53,7 @@ contains
     call write_collision_group(unit, cfg%collision)
     call write_output_group(unit, cfg%output)
     call write_bodies_group(unit, cfg%bodies)
+    call write_suspension_group(unit, cfg%suspension)
   end subroutine write_config
 
   !> Every variable of the configuration as (group, name, value text), through its own namelist

@@ -7,6 +7,7 @@ module config_checks
   use deck_file, only: int_text, real_text
   use config_forcing, only: forcing_mode_extent
   use config_grid, only: smallest_spacing
+  use config_suspension, only: species_count, species_semi_axes
   use error_handling, only: input_error, fatal
   implicit none
   private
@@ -20,6 +21,7 @@ contains
     if (cfg%scene%fluid == 'resolved') call check_fluid_cross(cfg, nranks)
     if (cfg%scene%forcing /= 'none') call check_forcing_cross(cfg)
     if (cfg%scene%particles == 'pair') call check_particle_cross(cfg)
+    if (cfg%scene%particles == 'suspension') call check_suspension_cross(cfg)
     if (cfg%scene%particles == 'pair' .and. cfg%scene%fluid == 'resolved') call check_pair_in_box(cfg)
     if ((cfg%scene%particles == 'prescribed' .or. cfg%scene%particles == 'free') .and. cfg%scene%fluid == 'resolved') &
       call check_bodies_in_box(cfg)
@@ -186,7 +188,8 @@ contains
   !> The scene's particles move under their loads (the pair, or free bodies placed by &bodies).
   logical function free_particles(cfg)
     type(agglo_config_t), intent(in) :: cfg
-    free_particles = cfg%scene%particles == 'pair' .or. cfg%scene%particles == 'free'
+    free_particles = cfg%scene%particles == 'pair' .or. cfg%scene%particles == 'free' .or. &
+                     cfg%scene%particles == 'suspension'
   end function free_particles
 
   !> Free bodies placed by &bodies: in the resolved fluid (the point or resolved provider), starting
@@ -204,6 +207,55 @@ contains
                          '0 with &scene particles = ''free'' (free bodies move under their loads, not a prescribed motion)')
     end do
   end subroutine check_free_cross
+
+  !> A suspension in the periodic box of &grid: each species' longest extent (2 a or 2 b) plus
+  !> min_gap under half the smallest box length (the minimum-image convention of the pairs); the
+  !> nanometre-scale model lengths far below the smallest body (the Derjaguin limit, as for the
+  !> pair); min_gap above the collision detection floor (a body placed inside the detection distance
+  !> would collide at the first step); with particle_coupling = 'resolved' every species at least 4
+  !> cells thick (the ghost layers of its opposite faces would overlap), naming the grid it needs.
+  subroutine check_suspension_cross(cfg)
+    type(agglo_config_t), intent(in) :: cfg
+    real(wp), parameter :: thinnest_cells = 4.0_wp
+    real(wp) :: axes(2), smallest_box, spacing, smallest_radius
+    integer :: k
+    character(len=:), allocatable :: index
+    smallest_box = min(cfg%grid%length_x, cfg%grid%length_y, cfg%grid%length_z)
+    spacing = max(cfg%grid%length_x / cfg%grid%nx, cfg%grid%length_y / cfg%grid%ny, cfg%grid%length_z / cfg%grid%nz)
+    smallest_radius = huge(1.0_wp)
+    do k = 1, species_count(cfg%suspension)
+      index = '('//int_text(k)//')'
+      axes = species_semi_axes(cfg%suspension, k)
+      smallest_radius = min(smallest_radius, minval(axes))
+      if (.not. (2.0_wp * maxval(axes) + cfg%suspension%min_gap < 0.5_wp * smallest_box)) call input_error( &
+          'suspension', 'radius'//index, real_text(cfg%suspension%radius(k)), 'a body whose longest extent 2 x '// &
+          real_text(maxval(axes))//' m plus min_gap is under half the smallest box length ('// &
+          real_text(0.5_wp * smallest_box)//' m; the minimum-image convention of the periodic box)')
+      if (cfg%scene%fluid == 'resolved' .and. cfg%scene%particle_coupling == 'resolved' .and. &
+          2.0_wp * minval(axes) < thinnest_cells * spacing) call input_error('suspension', 'radius'//index, &
+          real_text(cfg%suspension%radius(k))//' ('//trim(cfg%suspension%shape(k))//' '// &
+          real_text(2.0_wp * minval(axes) / spacing)//' cells thin)', 'a body at least 4 cells thick for the '// &
+          'immersed boundary with particle_coupling = ''resolved'': &grid nx = ny = nz >= '// &
+          int_text(ceiling(thinnest_cells * max(cfg%grid%length_x, cfg%grid%length_y, cfg%grid%length_z) / &
+          (2.0_wp * minval(axes))))//' for this box, or a larger radius')
+    end do
+    if (cfg%scene%dlvo .and. .not. cfg%suspension%ghost) then
+      if (.not. (cfg%dlvo%vdw_cutoff < 0.01_wp * smallest_radius)) call input_error('dlvo', 'vdw_cutoff', &
+          real_text(cfg%dlvo%vdw_cutoff), '< 0.01 x the smallest semi-axis of &suspension = '// &
+          real_text(0.01_wp * smallest_radius)//' m')
+    end if
+    if (cfg%scene%collisions) then
+      if (.not. (cfg%suspension%min_gap > cfg%collision%detection_floor)) call input_error('suspension', 'min_gap', &
+          real_text(cfg%suspension%min_gap), '> &collision detection_floor = '// &
+          real_text(cfg%collision%detection_floor)//' m (a body placed within it collides at the first step)')
+    end if
+    if (cfg%suspension%ghost .and. cfg%collision%lubrication) call input_error('suspension', 'ghost', &
+        '.true. with &collision lubrication = .true.', '.false., or lubrication = .false. (ghost bodies pass '// &
+        'through each other; a lubrication force would act between them)')
+    if (cfg%suspension%ghost .and. .not. cfg%scene%collisions) call input_error('suspension', 'ghost', &
+        '.true. with &scene collisions = .false.', '.false., or &scene collisions = .true. (ghost mode counts '// &
+        'the collisions the collision test detects)')
+  end subroutine check_suspension_cross
 
   !> Bodies in prescribed motion: resolved fluid (either viscous scheme: with Crank-Nicolson the
   !> predictor's system holds the body rows, immersed_predictor; any forcing).

@@ -11,6 +11,8 @@ module config_output
   type :: output_config_t
     character(len=longest_path + 1) :: directory = ''   !< run directory; '' means output/<run name>
     integer :: stats_interval = 1             !< steps between time-series rows (fluid and particles)
+    !> particle steps between particles.h5 rows; 0 = stats_interval
+    integer :: particle_interval = 0
     real(wp) :: field_interval = 0.0_wp       !< s of simulated time between field snapshots; 0 = start and end only
     integer :: checkpoint_interval = 0        !< steps between checkpoints; 0 = only at the end
     integer :: checkpoints_kept = 2           !< older complete checkpoints are deleted beyond this
@@ -19,10 +21,10 @@ module config_output
   end type output_config_t
 
   character(len=longest_path + 1) :: directory
-  integer :: stats_interval, checkpoint_interval, checkpoints_kept, flow_statistics_interval
+  integer :: stats_interval, checkpoint_interval, checkpoints_kept, flow_statistics_interval, particle_interval
   real(wp) :: field_interval
   namelist /output/ directory, stats_interval, field_interval, checkpoint_interval, checkpoints_kept, &
-                    flow_statistics_interval
+                    flow_statistics_interval, particle_interval
 
 contains
 
@@ -30,14 +32,14 @@ contains
     type(output_config_t), intent(in) :: cfg
     directory = cfg%directory; stats_interval = cfg%stats_interval; field_interval = cfg%field_interval
     checkpoint_interval = cfg%checkpoint_interval; checkpoints_kept = cfg%checkpoints_kept
-    flow_statistics_interval = cfg%flow_statistics_interval
+    flow_statistics_interval = cfg%flow_statistics_interval; particle_interval = cfg%particle_interval
   end subroutine to_namelist
 
   subroutine from_namelist(cfg)
     type(output_config_t), intent(inout) :: cfg
     cfg%directory = directory; cfg%stats_interval = stats_interval; cfg%field_interval = field_interval
     cfg%checkpoint_interval = checkpoint_interval; cfg%checkpoints_kept = checkpoints_kept
-    cfg%flow_statistics_interval = flow_statistics_interval
+    cfg%flow_statistics_interval = flow_statistics_interval; cfg%particle_interval = particle_interval
   end subroutine from_namelist
 
   subroutine read_output_group(deck, cfg)
@@ -57,6 +59,8 @@ contains
     call require_nonnegative('output', 'field_interval', cfg%field_interval)
     if (cfg%checkpoint_interval /= 0) call require_positive_int('output', 'checkpoint_interval', cfg%checkpoint_interval)
     call require_positive_int('output', 'checkpoints_kept', cfg%checkpoints_kept)
+    if (cfg%particle_interval < 0) call input_error('output', 'particle_interval', int_text(cfg%particle_interval), &
+        '>= 0 (particle steps between particles.h5 rows; 0 = stats_interval)')
     if (cfg%flow_statistics_interval < 0) call input_error('output', 'flow_statistics_interval', &
         int_text(cfg%flow_statistics_interval), '>= 0 (steps between flow-statistics rows; 0 = as &forcing says)')
   end subroutine check_output_group

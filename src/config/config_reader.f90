@@ -16,6 +16,7 @@ module config_reader
   use config_dlvo, only: read_dlvo_group, check_dlvo_group
   use config_collision, only: read_collision_group, check_collision_group, default_lubrication_handover
   use config_bodies, only: read_bodies_group, read_body_file, check_bodies_group
+  use config_suspension, only: read_suspension_group, check_suspension_group
   implicit none
   private
   public :: read_config, parse_config, read_groups, apply_override
@@ -74,8 +75,13 @@ contains
       if (len_trim(cfg%bodies%file) > 0) call read_body_file(cfg%bodies)
       call check_bodies_group(cfg%bodies)
     end if
+    ! A suspension lives in the periodic box of &grid, with any fluid.
+    if (cfg%scene%particles == 'suspension') then
+      call check_grid_group(cfg%grid)
+      call check_suspension_group(cfg%suspension)
+    end if
     ! Free bodies take their material, integrator and DLVO radius from &pair (docs/decks.md, &bodies).
-    if (cfg%scene%particles == 'pair' .or. cfg%scene%particles == 'free') then
+    if (cfg%scene%particles == 'pair' .or. cfg%scene%particles == 'free' .or. cfg%scene%particles == 'suspension') then
       call check_pair_group(cfg%pair)
       if (cfg%scene%dlvo) call check_dlvo_group(cfg%dlvo)
       if (cfg%scene%collisions .or. cfg%collision%lubrication) call check_collision_group(cfg%collision)
@@ -97,6 +103,7 @@ contains
     call read_collision_group(deck, cfg%collision)
     call read_output_group(deck, cfg%output)
     call read_bodies_group(deck, cfg%bodies)
+    call read_suspension_group(deck, cfg%suspension)
   end subroutine read_groups
 
   !> Merge one "group.variable=value" into the deck text: the assignment goes on its own line just

@@ -9,14 +9,14 @@ module config_scene
   type :: scene_config_t
     character(len=16) :: fluid = 'resolved'       !< 'none' | 'stokes' | 'resolved'
     !> 'none' | 'pair' | 'prescribed' (&bodies, resolved fluid) | 'free' (free bodies placed by &bodies,
-    !> resolved fluid)
+    !> resolved fluid) | 'suspension' (free bodies placed at random by &suspension, any fluid)
     character(len=16) :: particles = 'none'
     character(len=16) :: forcing = 'none'         !< 'none' | 'eswaran_pope' (resolved fluid only)
     character(len=16) :: ibm_coupling = 'implicit' !< 'implicit' | 'explicit' (resolved fluid with particles)
     logical :: dlvo = .true.                      !< DLVO forces between the particles
     logical :: collisions = .true.                !< hard-body collisions between the particles
     integer :: particle_substeps = 1              !< particle steps per fluid step (frozen loads)
-    !> How the free particles (the pair, or 'free' bodies) in the resolved fluid feel it: 'point'
+    !> How the free particles (the pair, 'free' bodies or a suspension) in the resolved fluid feel it: 'point'
     !> (analytic Stokes resistance in the flow at each centre, the fluid solved without the bodies) |
     !> 'resolved' (free particles resolved by the immersed boundary)
     character(len=16) :: particle_coupling = 'resolved'
@@ -61,7 +61,8 @@ contains
   subroutine check_scene_group(cfg)
     type(scene_config_t), intent(in) :: cfg
     call require_option('scene', 'fluid', cfg%fluid, [character(len=8) :: 'none', 'stokes', 'resolved'])
-    call require_option('scene', 'particles', cfg%particles, [character(len=10) :: 'none', 'pair', 'prescribed', 'free'])
+    call require_option('scene', 'particles', cfg%particles, &
+                        [character(len=10) :: 'none', 'pair', 'prescribed', 'free', 'suspension'])
     call require_option('scene', 'forcing', cfg%forcing, [character(len=12) :: 'none', 'eswaran_pope'])
     call require_option('scene', 'ibm_coupling', cfg%ibm_coupling, [character(len=8) :: 'implicit', 'explicit'])
     call require_positive_int('scene', 'particle_substeps', cfg%particle_substeps)

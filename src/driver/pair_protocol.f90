@@ -34,7 +34,7 @@ module pair_protocol
   use particle_output, only: particle_output_t, pair_run_metadata_t, particle_record_t, pair_record_t, &
                              collision_event_t, run_summary_t, particle_output_open, &
                              particle_output_continue, particle_output_flush, particle_output_rows, &
-                             append_particles_sample, append_collision_event
+                             append_particles_sample, append_bodies_sample, append_collision_event
   implicit none
   private
   public :: pair_loop_t, setup_system, record_interaction, run_finished, sampled, write_sample, finish_summary, &
@@ -152,11 +152,14 @@ contains
     if (name == 'resolved') name = name//'_'//trim(cfg%scene%particle_coupling)
   end function fluid_name
 
-  !> Is step one of the &output stats_interval samples?
+  !> Is step one of the samples of particles.h5 (&output particle_interval, 0: stats_interval)?
   logical function sampled(cfg, step)
     type(agglo_config_t), intent(in) :: cfg
     integer(i8), intent(in) :: step
-    sampled = mod(step, int(cfg%output%stats_interval, i8)) == 0
+    integer :: interval
+    interval = cfg%output%particle_interval
+    if (interval == 0) interval = cfg%output%stats_interval
+    sampled = mod(step, int(interval, i8)) == 0
   end function sampled
 
   !> The two bodies of the placed pair, their models, no box (the pair scenes are unbounded; the
@@ -261,14 +264,22 @@ contains
         system%pairs(the_pair)%dlvo%chi_eta)
   end function current_outcome
 
-  subroutine write_sample(output, time, system, hydrodynamic)
+  !> One row of particles.h5: every body and every pair record; with bodies_layout = .true. (a
+  !> suspension, whose near pairs change from step to step) every body in the bodies layout, no pairs.
+  subroutine write_sample(output, time, system, hydrodynamic, bodies_layout)
     type(particle_output_t), intent(inout) :: output
     real(wp), intent(in) :: time
     type(particle_system_t), intent(in) :: system
     type(particle_loads_t), intent(in) :: hydrodynamic
-    type(particle_record_t) :: records(system%n)
-    type(pair_record_t) :: pair_records(size(system%pairs))
-    integer :: i, p
+    logical, intent(in), optional :: bodies_layout
+    type(particle_record_t), allocatable :: records(:)
+    type(pair_record_t), allocatable :: pair_records(:)
+    integer :: i, p, written_pairs
+    logical :: bodies
+    bodies = .false.
+    if (present(bodies_layout)) bodies = bodies_layout
+    written_pairs = merge(0, size(system%pairs), bodies)
+    allocate(records(system%n), pair_records(written_pairs))
     do i = 1, system%n
       records(i) = particle_record_t(position=system%bodies(i)%position, quaternion=system%bodies(i)%quaternion, &
           velocity=system%bodies(i)%velocity, angular_velocity=angular_velocity_lab(system%bodies(i)), &
@@ -276,14 +287,18 @@ contains
           force_collision=system%collision_loads%force(:, i), torque_hydrodynamic=hydrodynamic%torque(:, i), &
           torque_dlvo=system%dlvo_loads%torque(:, i), torque_collision=system%collision_loads%torque(:, i))
     end do
-    do p = 1, size(system%pairs)
+    do p = 1, size(pair_records)
       associate (pair => system%pairs(p))
         pair_records(p) = pair_record_t(first=pair%first, second=pair%second, gap=pair%contact%gap, &
             closest_point1=pair%contact%point1, closest_point2=pair%contact%point2, chi_eta=pair%dlvo%chi_eta, &
             relative_velocity=normal_approach_speed(system, p), vdw_force=abs(pair%dlvo%vdw_force))
       end associate
     end do
-    call append_particles_sample(output, time, records, pair_records)
+    if (bodies) then
+      call append_bodies_sample(output, time, records)
+    else
+      call append_particles_sample(output, time, records, pair_records)
+    end if
   end subroutine write_sample
 
   !> Normal approach speed of the closest points of pair p, > 0 approaching.
@@ -302,8 +317,8 @@ contains
     integer, intent(in) :: collisions
     character(len=:), allocatable :: text
     integer :: p, closest
-    if (size(system%pairs) == 0) then   ! a single body: no gap to report
-      text = '  bodies: 1, no pair  collisions = '//int_text(collisions)
+    if (size(system%pairs) == 0) then   ! a single body, or no pair near enough to interact
+      text = '  bodies: '//int_text(system%n)//', no near pair  collisions = '//int_text(collisions)
       return
     end if
     closest = 1

@@ -2,7 +2,8 @@
 !> decides which stages run, never which loop:
 !>   set-up       the fluid (&scene fluid = 'resolved': the initial field or the newest checkpoint,
 !>                the forcing, the statistics files), the particle system (&scene particles = 'pair':
-!>                the pair protocol's placement, module pair_protocol) and the particles'
+!>                the pair protocol's placement, module pair_protocol; 'free': the bodies of &bodies;
+!>                'suspension': the random placement of module suspension_scene) and the particles'
 !>                hydrodynamics provider (module particle_hydrodynamics: 'none', 'stokes', 'point',
 !>                'resolved', 'prescribed'), selected once here (module scene_setup);
 !>   per fluid step (with a fluid):
@@ -61,19 +62,23 @@ module scene_loop
   use particle_hydrodynamics, only: particle_hydrodynamics_t
   use scene_setup, only: start_fluid, next_output_time, hydrodynamics_of, add_fluid_motion, place_free_bodies, &
                          require_bodies_apart
+  use suspension_scene, only: place_suspension
   implicit none
   private
   public :: run_scene
 
   !> The pair's only pair in the system's pair list.
   integer, parameter :: the_pair = 1
+  !> The most bodies of a suspension whose surfaces the field snapshots hold (320 faces, about
+  !> 33 kB each: 1000 bodies add 33 MB to every snapshot).
+  integer, parameter :: surface_bodies_most = 1000
 
 contains
 
   subroutine run_scene(cfg)
     type(agglo_config_t), intent(in) :: cfg
     ! What runs: a resolved fluid, free particles (the pair protocol's system), and their provider.
-    logical :: with_fluid, with_particles, with_pair
+    logical :: with_fluid, with_particles, with_pair, with_suspension
     character(len=:), allocatable :: scene_name
     type(fluid_solver_t) :: solver
     type(forcing_driver_t) :: forcing                    ! Eswaran-Pope body force (inactive when off)
@@ -95,10 +100,12 @@ contains
 
     with_fluid = cfg%scene%fluid == 'resolved'
     with_pair = cfg%scene%particles == 'pair'
-    with_particles = with_pair .or. cfg%scene%particles == 'free'
+    with_suspension = cfg%scene%particles == 'suspension'
+    with_particles = with_pair .or. cfg%scene%particles == 'free' .or. with_suspension
     scene_name = trim(merge('resolved pair scene', 'resolved scene     ', with_pair))
     if (cfg%scene%particles == 'free') scene_name = 'free bodies scene'
     if (.not. with_fluid) scene_name = 'pair scene'
+    if (with_suspension) scene_name = 'suspension scene'
     substeps = 1
     if (with_fluid .and. with_particles) substeps = cfg%scene%particle_substeps
 
@@ -144,7 +151,9 @@ contains
         call run_context_start(context, with_fluid, with_particles)
         if (cfg%run%restart) call checkpoint_open_newest(restart)
       end if
-      if (with_particles .and. .not. with_pair) then
+      if (with_suspension) then
+        call place_suspension(cfg, system)
+      else if (with_particles .and. .not. with_pair) then
         call place_free_bodies(cfg, solver, system)
       else if (with_pair) then
         if (with_fluid) then
@@ -172,7 +181,8 @@ contains
           call fatal('resolved pair scene: the checkpoint''s particle time '//real_text(loop%time)// &
                      ' s is not its fluid time '//real_text(solver%time)//' s')
       else if (with_particles) then
-        if (with_fluid .and. cfg%pair%relative_to_fluid) call add_fluid_motion(solver, system)
+        ! A suspension starts with the fluid's velocity at its centres (plus its random velocities).
+        if (with_fluid .and. (cfg%pair%relative_to_fluid .or. with_suspension)) call add_fluid_motion(solver, system)
         if (with_pair) then
           call open_particle_output(cfg, pair, system, output)
         else
@@ -198,11 +208,12 @@ contains
           ! The checkpoint was written after its step's events, sample and end test: only the end
           ! test is repeated (the continued run's deck may set a later end).
           finished = end_rule()
-          if (finished .and. .not. sampled(cfg, loop%step)) call write_sample(output, loop%time, system, hydrodynamic)
+          if (finished .and. .not. sampled(cfg, loop%step)) call write_sample(output, loop%time, system, hydrodynamic, &
+                                                                            bodies_layout=with_suspension)
         else
           call record_interaction(cfg, system, loop, output, summary)
           call felt_loads(0.0_wp)
-          call write_sample(output, loop%time, system, hydrodynamic)
+          call write_sample(output, loop%time, system, hydrodynamic, bodies_layout=with_suspension)
           finished = with_fluid .and. end_rule()
         end if
       else
@@ -283,11 +294,13 @@ contains
         call record_interaction(cfg, system, loop, output, summary)
         ! The loads of the new state: the next sub-step's, and the sample's.
         call felt_loads(real(substep, wp) / substeps)
-        if (sampled(cfg, loop%step)) call write_sample(output, loop%time, system, hydrodynamic)
+        if (sampled(cfg, loop%step)) call write_sample(output, loop%time, system, hydrodynamic, &
+                                                       bodies_layout=with_suspension)
       end do
       call timer_toc(context%timers%particles)
       finished = end_rule()
-      if (finished .and. .not. sampled(cfg, loop%step)) call write_sample(output, loop%time, system, hydrodynamic)
+      if (finished .and. .not. sampled(cfg, loop%step)) call write_sample(output, loop%time, system, hydrodynamic, &
+                                                                          bodies_layout=with_suspension)
     end subroutine particle_substeps
 
     !> The pair's end rule (module pair_protocol) at the loop's step; free bodies end at &run
@@ -300,19 +313,35 @@ contains
       end if
     end function end_rule
 
-    !> particles.h5 of free bodies, in the pair scenes' layout (N bodies, their N (N - 1) / 2 pairs).
+    !> particles.h5 of free bodies, in the pair scenes' layout (N bodies, their N (N - 1) / 2 pairs);
+    !> a suspension's without the pairs (its near pairs change from step to step).
     subroutine open_bodies_output()
       type(pair_run_metadata_t) :: metadata
       metadata%name = cfg%run%name
-      metadata%shape = cfg%bodies%shape(1)
-      if (any(cfg%bodies%shape(2:system%n) /= cfg%bodies%shape(1))) metadata%shape = 'mixed'
+      if (with_suspension) then
+        metadata%shape = cfg%suspension%shape(1)
+        if (any(system%shapes%aspect_ratio /= system%shapes(1)%aspect_ratio) .or. &
+            any(system%shapes%radius /= system%shapes(1)%radius)) metadata%shape = 'mixed'
+      else
+        metadata%shape = cfg%bodies%shape(1)
+        if (any(cfg%bodies%shape(2:system%n) /= cfg%bodies%shape(1))) metadata%shape = 'mixed'
+      end if
       metadata%aspect_ratio = system%shapes(1)%aspect_ratio
-      metadata%radius = cfg%bodies%radius(1)
+      metadata%radius = system%shapes(1)%radius
       metadata%fluid = fluid_name(cfg)
       metadata%seed = int(cfg%run%seed, i8)
       metadata%bodies = system%n
       call particle_output_open(output, run_file('particles.h5'), metadata)
     end subroutine open_bodies_output
+
+    function progress_detail() result(text)
+      character(len=:), allocatable :: text
+      if (with_pair) then
+        text = pair_progress_detail(system)
+      else
+        text = bodies_progress_detail(system, summary%collisions)
+      end if
+    end function progress_detail
 
     !> The provider's loads of the current state, or none before the first collision with &pair
     !> hydrodynamics_from = 'first_contact' (the fluid sees the moving bodies all the same).
@@ -351,7 +380,7 @@ contains
           call log_line(progress_report(context%meter, wall_time(), loop%step, loop%time, dt, &
                                         (wall_time() - context%wall_start) / real(loop%step - context%first_step, wp), &
                                         loop%end_time - loop%time, steps_left=real(cfg%run%max_steps - loop%step, wp), &
-                                        detail=pair_progress_detail(system)))
+                                        detail=progress_detail()))
         return
       end if
       if (mod(solver%step, int(cfg%run%progress_interval, i8)) == 0 .or. (finished .and. with_particles)) then
@@ -383,11 +412,13 @@ contains
       if (mod(loop_step(), int(cfg%output%checkpoint_interval, i8)) == 0) call checkpoint(last=.false.)
     end subroutine checkpoint_due
 
-    !> The fluid's snapshot, with the bodies' surfaces when there are bodies.
+    !> The fluid's snapshot, with the bodies' surfaces when there are bodies (a suspension of more
+    !> than surface_bodies_most bodies: the fluid alone; its bodies are in particles.h5).
     subroutine output_fields()
       type(body_pose_t), allocatable :: poses(:)
       call timer_tic(context%timers%fields)
-      call hydrodynamics%body_poses(solver, system, poses)
+      if (.not. (with_suspension .and. system%n > surface_bodies_most)) &
+        call hydrodynamics%body_poses(solver, system, poses)
       if (allocated(poses)) then
         call write_fluid_snapshot(solver, poses)
       else
@@ -438,13 +469,16 @@ contains
         call write_summary_json(run_file('summary.json'), summary)
       end if
       call timing_report(steps, wall_time() - context%wall_start)
-      if (.not. with_fluid) then
+      if (.not. with_fluid .and. .not. with_pair) then
+        call log_line(scene_name//': '//int_text(system%n)//' bodies, '//int_text(summary%collisions)// &
+            ' collisions, t = '//real_text(loop%time)//' s; particles.h5 in '//run_file(''))
+      else if (.not. with_fluid) then
         call log_line('pair scene: outcome '//trim(summary%outcome)//'; particles.h5 and summary.json written')
         if (loop%step >= cfg%run%max_steps .and. loop%time < loop%end_time * (1.0_wp - 1.0e-12_wp)) &
           call log_line('pair scene: stopped by &run max_steps = '//int_text(cfg%run%max_steps)//' at t = '// &
                         real_text(loop%time)//' s, before the end time '//real_text(loop%end_time)//' s')
       else if (with_particles .and. .not. with_pair) then
-        call log_line('free bodies scene: '//int_text(system%n)//' bodies, '//int_text(summary%collisions)// &
+        call log_line(scene_name//': '//int_text(system%n)//' bodies, '//int_text(summary%collisions)// &
             ' collisions, t = '//real_text(solver%time)//' s; particles.h5, fluid_statistics.dat and fields.xdmf '// &
             '(and bodies_loads.dat with particle_coupling = ''resolved'') in '//run_file(''))
       else if (with_particles) then

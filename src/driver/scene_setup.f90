@@ -153,8 +153,10 @@ contains
     do i = 1, system%n
       system%bodies(i)%velocity = system%bodies(i)%velocity + velocity(:, i)
       call set_angular_velocity_lab(system%bodies(i), local_rotation(gradient(:, :, i)))
-      speeds = speeds//merge(', ', '  ', i > 1)//scientific_text(norm2(velocity(:, i)))
+      if (i <= 4) speeds = speeds//merge(', ', '  ', i > 1)//scientific_text(norm2(velocity(:, i)))
     end do
+    if (system%n > 4) speeds = speeds//', ... (rms '// &
+        scientific_text(sqrt(sum(velocity**2) / system%n))//' over '//int_text(system%n)//' bodies)'
     call log_line('resolved pair scene: start velocities on top of the fluid''s: |u_f| = '//speeds(3:)// &
         ' m/s at the centres')
   end subroutine add_fluid_motion

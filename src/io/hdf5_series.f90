@@ -21,7 +21,9 @@ module hdf5_series
     module procedure append_real, append_int
   end interface h5_append
 
-  integer, parameter :: append_chunk_rows = 512   !< rows per chunk of extendible datasets
+  !> rows per chunk of extendible datasets; rows of more than 32 values: 16384 values per chunk (a
+  !> first chunk of a wide row, e.g. every body of a suspension, stays 128 KiB)
+  integer, parameter :: append_chunk_rows = 512
 
 contains
 
@@ -63,7 +65,7 @@ contains
       else
         call open_for_writing(file, name, type_id, [int(width, hsize_t), 0_hsize_t], dataset, &
                               maxdims=[int(width, hsize_t), H5S_UNLIMITED_F], &
-                              chunk=[int(width, hsize_t), int(append_chunk_rows, hsize_t)])
+                              chunk=[int(width, hsize_t), int(max(1, min(append_chunk_rows, 16384 / width)), hsize_t)])
       end if
       call h5dclose_f(dataset, status)
     end if

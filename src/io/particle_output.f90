@@ -11,7 +11,8 @@
 !>  - the particle layout of docs/outputs.md: append_particles_sample(out, time, particles, pairs) for
 !>    N bodies and their pairs (append_pair_sample for one pair) and append_collision_event(out, event),
 !>    with the record types below.
-!> Rows are buffered in memory (buffer_rows of them) and appended to extendible, chunked datasets
+!> Rows are buffered in memory (buffer_rows of them, fewer for many bodies: buffered_rows) and
+!> appended to extendible, chunked datasets
 !> when the buffer is full, on particle_output_flush and on particle_output_close.
 !> particles.h5 is complete once closed; summary.json, written last via a temporary name, marks a
 !> completed run. A restarted run continues the file of the run it continues (particle_output_continue)
@@ -31,6 +32,7 @@ module particle_output
             run_summary_t, particle_output_open, particle_output_continue, particle_output_close, &
             particle_output_flush, particle_output_rows, &
             sample_value, sample_end, event_value, event_end, append_pair_sample, append_particles_sample, &
+            append_bodies_sample, &
             append_collision_event, &
             write_summary_json, collision_event_columns
 
@@ -114,7 +116,7 @@ module particle_output
   type :: column_t
     character(len=:), allocatable :: name
     integer :: width = 0                     !< 0: scalar column, dataset (N); m: dataset (m, N)
-    real(wp), allocatable :: rows(:,:)       !< (max(width, 1), buffer_rows)
+    real(wp), allocatable :: rows(:,:)       !< (max(width, 1), the table's capacity)
     logical :: staged = .false.              !< set in the row being built
   end type column_t
 
@@ -125,6 +127,7 @@ module particle_output
     logical :: fixed = .false.               !< columns fixed by the first row
     integer :: buffered = 0                  !< rows in the buffers
     integer(i8) :: rows = 0_i8               !< rows committed (written or buffered)
+    integer :: capacity = buffer_rows        !< rows held before they are written (buffered_rows)
   end type table_t
 
   !> An open particles.h5 (only rank 0's copy is active).
@@ -158,6 +161,7 @@ contains
     out%events%group = 'events/'
     allocate(out%samples%columns(0), out%events%columns(0))
     out%bodies = metadata%bodies
+    out%samples%capacity = buffered_rows(metadata%bodies)
     if (.not. out%active) return
     call h5_create(out%file, path, serial=.true.)
     call h5_write_string(out%file, 'name', trim(metadata%name))
@@ -185,6 +189,7 @@ contains
     out%events%group = 'events/'
     allocate(out%samples%columns(0), out%events%columns(0))
     out%bodies = bodies
+    out%samples%capacity = buffered_rows(bodies)
     out%samples%rows = sample_rows
     out%events%rows = event_rows
     if (.not. out%active) return
@@ -199,6 +204,13 @@ contains
       end if
     end do
   end subroutine particle_output_continue
+
+  !> Sample rows held in memory for a run of the given bodies: buffer_rows, fewer when a row of all
+  !> bodies (34 values each) would make the buffer larger than 2^21 values (16 MiB).
+  pure integer function buffered_rows(bodies)
+    integer, intent(in) :: bodies
+    buffered_rows = max(1, min(buffer_rows, 2**21 / max(1, 34 * bodies)))
+  end function buffered_rows
 
   !> Rows committed so far (written or buffered; rank 0's count, 0 on the other ranks): the time
   !> series and the events table.
@@ -265,7 +277,7 @@ contains
                                 ' is not among the columns fixed by the first row', collective=.false.)
     column%name = trim(name)
     column%width = width
-    allocate(column%rows(max(width, 1), buffer_rows))
+    allocate(column%rows(max(width, 1), table%capacity))
     table%columns = [table%columns, column]
     column_index = size(table%columns)
   end function column_index
@@ -298,7 +310,7 @@ contains
     table%fixed = .true.
     table%buffered = table%buffered + 1
     table%rows = table%rows + 1
-    if (table%buffered == buffer_rows) call write_buffered(file, table)
+    if (table%buffered == table%capacity) call write_buffered(file, table)
   end subroutine commit_row
 
   subroutine write_buffered(file, table)
@@ -412,6 +424,31 @@ contains
     end do
     call sample_end(out)
   end subroutine append_particles_sample
+
+  !> One row of the time series of a suspension (N bodies, one dataset per quantity): /time and
+  !> /suspension/<quantity> of width 3 N (4 N for the quaternion), body after body, so h5py reads
+  !> f['suspension/position'][:].reshape(rows, N, 3). Ten datasets for any N (not ten per body).
+  subroutine append_bodies_sample(out, time, particles)
+    type(particle_output_t), intent(inout) :: out
+    real(wp), intent(in) :: time
+    type(particle_record_t), intent(in) :: particles(:)
+    integer :: n, k
+    if (.not. out%active) return
+    out%pair_layout = .true.
+    n = size(particles)
+    call sample_value(out, 'time', time)
+    call sample_value(out, 'suspension/position', [(particles(k)%position, k = 1, n)])
+    call sample_value(out, 'suspension/quaternion', [(particles(k)%quaternion, k = 1, n)])
+    call sample_value(out, 'suspension/velocity', [(particles(k)%velocity, k = 1, n)])
+    call sample_value(out, 'suspension/angular_velocity', [(particles(k)%angular_velocity, k = 1, n)])
+    call sample_value(out, 'suspension/force_hydrodynamic', [(particles(k)%force_hydrodynamic, k = 1, n)])
+    call sample_value(out, 'suspension/force_dlvo', [(particles(k)%force_dlvo, k = 1, n)])
+    call sample_value(out, 'suspension/force_collision', [(particles(k)%force_collision, k = 1, n)])
+    call sample_value(out, 'suspension/torque_hydrodynamic', [(particles(k)%torque_hydrodynamic, k = 1, n)])
+    call sample_value(out, 'suspension/torque_dlvo', [(particles(k)%torque_dlvo, k = 1, n)])
+    call sample_value(out, 'suspension/torque_collision', [(particles(k)%torque_collision, k = 1, n)])
+    call sample_end(out)
+  end subroutine append_bodies_sample
 
   !> One row of the events table (/events/<collision_event_columns>, and the bodies with more than two).
   subroutine append_collision_event(out, event)

@@ -73,6 +73,9 @@ module particle_system
     !> closest points, no DLVO, no collision). huge(): every pair always interacts (the pair scenes,
     !> where the DLVO force has no cut-off).
     real(wp) :: interaction_gap = huge(1.0_wp)
+    !> Ghost collisions (with collisions on): a pair whose surfaces meet within the next step is
+    !> counted as a collision, with no impulse (ghost_contacts); the bodies pass through each other.
+    logical :: ghost = .false.
   end type particle_models_t
 
   !> Force and torque (about the centre) on each body, lab frame: (3, N).
@@ -372,6 +375,12 @@ contains
     previous = pair%contact
     call find_closest_points(system%shapes(pair%first), first%position, first%quaternion, system%shapes(pair%second), &
                              second%position, second%quaternion, pair%contact, previous=previous)
+    if (.not. pair%contact%converged .and. system%models%ghost) then
+      ! Ghost bodies may lie deep inside each other, where the closest points need not exist: such
+      ! a pair is not in contact (and not counted) until it has separated.
+      pair%contact = closest_points_t()
+      return
+    end if
     if (.not. pair%contact%converged) then
       write(which, '(a,i0,a,i0)') 'bodies ', pair%first, ' and ', pair%second
       call fatal('particle system: closest points of '//trim(which)//' did not converge: '//trim(pair%contact%message))
@@ -414,6 +423,10 @@ contains
       system%pairs(p)%collided = .false.
     end do
     if (.not. system%models%collisions) return
+    if (system%models%ghost) then
+      call ghost_contacts(system, dt)
+      return
+    end if
     allocate(touched(system%n), tested(size(system%pairs)), separation_speed(size(system%pairs)), &
              normal_impulse(size(system%pairs)), members(size(system%pairs)))
     touched = 0_i8
@@ -490,6 +503,32 @@ contains
                     int_text(cap)//' with '//int_text(system%approaching_left)//' contact(s) still approaching ('// &
                     int_text(system%sweep_caps_total)//' step(s) so far)')
   end subroutine resolve_collisions
+
+  !> Ghost collisions (models%ghost): every pair whose surfaces meet within the next step at the
+  !> current relative velocity, 0 <= gap < v_n dt (v_n the approach speed of the closest points), is
+  !> a collision of the kinematic collision rate (Wang, Wexler & Zhou 2000): counted and recorded
+  !> (collided, with v_n before and after), no impulse. A pair moving at constant velocities is
+  !> counted once per encounter: the step after, its gap is negative (overlap) until it separates.
+  subroutine ghost_contacts(system, dt)
+    type(particle_system_t), intent(inout) :: system
+    real(wp), intent(in) :: dt
+    real(wp) :: speed
+    integer :: p
+    do p = 1, size(system%pairs)
+      associate (pair => system%pairs(p))
+        if (.not. pair%active) cycle
+        if (.not. (pair%contact%gap >= 0.0_wp)) cycle
+        speed = approach_speed(system%bodies(pair%first), pair_body_image(system, pair), pair%contact%point1, &
+                               pair%contact%point2, pair%contact%normal)
+        if (.not. (pair%contact%gap < speed * dt)) cycle
+        pair%collided = .true.
+        pair%collision = collision_result_t(contact_point=0.5_wp * (pair%contact%point1 + pair%contact%point2), &
+            normal=pair%contact%normal, normal_velocity_before=speed, normal_velocity_after=speed)
+        system%collisions_last = system%collisions_last + 1
+        system%collisions_total = system%collisions_total + 1_i8
+      end associate
+    end do
+  end subroutine ghost_contacts
 
   !> One projected Gauss-Seidel update of a contact of the wave (resolve_collisions): applied when
   !> the contact's normal speed is off its target -separation_speed by more than slowest and the

@@ -1,4 +1,4 @@
-! checks: 31
+! checks: 34
 !> Configuration round trip: every deck variable set to a value other than its default, read as a
 !> deck, written back (the resolved deck run.nml is this namelist output), compared variable by
 !> variable. A variable lives in five places of its config_<group> module (type component, namelist
