@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# checks: 63
+# checks: 65
 # The shipped quiescent pair decks give what they gave before the particle system (N bodies, one
 # step routine) replaced the pair scene's private step. Reference values: recorded with the code of
 # the commit before that change (git log of this file), the same decks and seeds, on 1 rank.
@@ -183,4 +183,24 @@ print(('PASS ' if ok else 'FAIL ') + f"flip_paper_rebounded_in_flight  {p['outco
 ok = s['outcome'] == 'agglomerated' and s['outcome_settled'] is True and s['contact_episodes'] == 2
 print(('PASS ' if ok else 'FAIL ') + f"flip_settled_agglomerated  {s['outcome']} settled {s['outcome_settled']}"
       + f" episodes {s['contact_episodes']} collisions {s['collisions']}")
+EOF2
+
+# The paper's fixed end (&pair paper_end_time, the chaotic protocol's 3 ms) without the mirrored
+# end: needle seed 2 is still approaching, 2.4 um apart, at 3 ms, so the paper's rule ends it there in
+# flight ('no_contact'); the settled rule runs past 3 ms, through its one collision (5.71 ms), until
+# the rebound has left the 182 nm range moving apart: 'rebounded', settled, well before the 20 ms cap.
+run fixed_paper quiescent_needle_none 2 paper '' .false. 'paper_end_time = 3.0e-3' && \
+  run fixed_settled quiescent_needle_none 2 settled '' .false. 'paper_end_time = 3.0e-3' && \
+  "$PY" - "$work" <<'EOF2'
+import glob, json, sys
+def load(name):
+    return json.load(open(glob.glob(sys.argv[1] + '/' + name + '/output/*/summary.json')[0]))
+p, s = load('fixed_paper'), load('fixed_settled')
+ok = p['outcome'] == 'no_contact' and p['ended_in_flight'] is True and abs(p['end_time'] - 3.0e-3) <= 1e-9
+print(('PASS ' if ok else 'FAIL ') + f"fixed_paper_ends_at_3_ms_in_flight  {p['outcome']} end {p['end_time']!r}"
+      + f" in flight {p['ended_in_flight']}")
+ok = (s['outcome'] == 'rebounded' and s['ended_in_flight'] is False and s['contact_episodes'] == 1
+      and s['first_collision'] is not None and s['first_collision']['time'] < s['end_time'] < 0.02)
+print(('PASS ' if ok else 'FAIL ') + f"fixed_settled_runs_until_settled  {s['outcome']} end {s['end_time']!r}"
+      + f" in flight {s['ended_in_flight']}")
 EOF2
