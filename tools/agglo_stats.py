@@ -5,6 +5,10 @@ directory whose sub-directories are runs), in the layout of the pair scenes' per
 (summary.json, particles.h5; docs/tools.md). Prints per group (shape, and fluid when batches of
 several fluids are read) the number of runs, the outcomes and the agglomeration rate with its
 Wilson score 95% interval; writes runs.csv (every run's summary), rates.csv and the figures.
+Outcomes (docs/theory.md, "Run outcome"): agglomerated (bound), rebounded, approached (in the DLVO
+range without touching, then escaped) and no_contact; every class but agglomerated counts as not
+agglomerated. Summaries written before 'approached', contact_episodes and ended_in_flight existed
+are read as they are (no run of theirs is 'approached'; episodes from particles.h5).
 Run it through the launcher tools/agglo-stats (it picks the repository's .venv).
 """
 import argparse
@@ -15,7 +19,7 @@ import os
 import re
 import sys
 
-OUTCOMES = ("agglomerated", "rebounded", "no_contact")
+OUTCOMES = ("agglomerated", "rebounded", "approached", "no_contact")
 # Two-sided 95% quantile of the standard normal distribution, Phi^{-1}(0.975).
 Z_95 = 1.959963984540054
 SUMMARY_KEYS = ("name", "seed", "shape", "aspect_ratio", "fluid", "outcome", "collisions",
@@ -184,7 +188,12 @@ def history_metrics(run):
         values["chi_eta_first_collision"] = float(chi[np.argmin(np.abs(time - first["time"]))])
     if first is not None and radius is not None and points is not None:
         values["lever_arm_first_collision"] = lever_arm(time, first["time"], points, centres, radius)
-    values["contact_episodes"] = contact_episodes(events, time, gap, EPISODE_FLOORS * run.detection_floor)
+    # The code's own count when the summary has it (one events row per episode); older files hold a
+    # row per collision impulse, grouped here by the sampled gap.
+    if run.summary.get("contact_episodes") is not None:
+        values["contact_episodes"] = int(run.summary["contact_episodes"])
+    else:
+        values["contact_episodes"] = contact_episodes(events, time, gap, EPISODE_FLOORS * run.detection_floor)
     def path(speed):                      # trapezoidal integral of a speed over the rows
         return float(np.sum(0.5 * (speed[1:] + speed[:-1]) * np.diff(time)))
     values["carried_distance"] = path(np.linalg.norm(0.5 * (v1 + v2), axis=1))
@@ -295,8 +304,19 @@ def assign_groups(runs, group_by):
     return sorted({run.group for run in runs}, key=lambda g: (order.get(g.split("/")[0], 9), g))
 
 
+def ended_in_flight(summary):
+    """True/False: the run ended with its outcome not settled (summary ended_in_flight, or not
+    outcome_settled in summaries without it); None when the summary says neither."""
+    if summary.get("ended_in_flight") is not None:
+        return bool(summary["ended_in_flight"])
+    if summary.get("outcome_settled") is not None:
+        return not summary["outcome_settled"]
+    return None
+
+
 def rate_table(runs, groups):
-    """Rows of rates.csv: per group the counts and the agglomeration rate over all its runs."""
+    """Rows of rates.csv: per group the counts of every outcome, the agglomeration rate over all its
+    runs (every other class counts as not agglomerated) and the runs that ended in flight."""
     rows = []
     for group in groups:
         members = [run for run in runs if run.group == group]
@@ -308,7 +328,8 @@ def rate_table(runs, groups):
                      "fluid": ";".join(sorted({run.summary["fluid"] for run in members})),
                      "runs": len(members), **counts,
                      "rate": counts["agglomerated"] / len(members),
-                     "wilson_low": low, "wilson_high": high})
+                     "wilson_low": low, "wilson_high": high,
+                     "ended_in_flight": sum(ended_in_flight(run.summary) is True for run in members)})
     return rows
 
 
@@ -318,7 +339,7 @@ RUN_COLUMNS = ("batch", "run", "group", "name", "seed", "shape", "aspect_ratio",
                "final_relative_velocity", "psi_final", "end_time", "steps", "wall_time",
                "max_particle_speed", "chi_eta_first_collision", "lever_arm_first_collision",
                "contact_episodes", "carried_distance", "relative_path", "close_fraction", "min_gap",
-               "early_approach_ratio")
+               "early_approach_ratio", "ended_in_flight")
 
 
 def run_row(run):
@@ -336,6 +357,8 @@ def run_row(run):
     metrics = run.metrics()
     for key in HISTORY_METRICS[:-1]:
         row[key] = "" if metrics[key] is None else metrics[key]
+    in_flight = ended_in_flight(s)
+    row["ended_in_flight"] = "" if in_flight is None else in_flight
     return row
 
 
@@ -492,7 +515,7 @@ def make_figures(runs, groups, directory, history_runs, notes=None):
 
     colours = {group: f"C{k % 10}" for k, group in enumerate(groups)}
     outcome_style = {"agglomerated": ("C3", "-"), "rebounded": ("C0", "--"),
-                     "no_contact": ("C7", ":")}
+                     "approached": ("C2", "-."), "no_contact": ("C7", ":")}
     written = []
     few = FewSamples()
 
@@ -838,11 +861,13 @@ def choose_history_runs(runs, groups, requested):
 def print_rates(rows, stream):
     width = max(12, max(len(row["group"]) for row in rows))
     stream.write(f"{'group':<{width}} {'runs':>5} {'agglomerated':>12} {'rebounded':>9} "
-                 f"{'no_contact':>10} {'rate':>6}  Wilson 95% interval\n")
+                 f"{'approached':>10} {'no_contact':>10} {'rate':>6}  Wilson 95% interval"
+                 f"   in flight\n")
     for row in rows:
         stream.write(f"{row['group']:<{width}} {row['runs']:>5} {row['agglomerated']:>12} "
-                     f"{row['rebounded']:>9} {row['no_contact']:>10} {row['rate']:>6.3f}  "
-                     f"[{row['wilson_low']:.3f}, {row['wilson_high']:.3f}]\n")
+                     f"{row['rebounded']:>9} {row['approached']:>10} {row['no_contact']:>10} "
+                     f"{row['rate']:>6.3f}  [{row['wilson_low']:.3f}, {row['wilson_high']:.3f}]"
+                     f"   {row['ended_in_flight']:>9}\n")
 
 
 def print_means(rows, stream):

@@ -30,6 +30,10 @@ module config_pair
     real(wp) :: box_length = 1.0e-3_wp            !< m, box for centre = 'random'
     logical :: mirror_first_collision = .true.    !< end at twice the first-collision time (paper)
     character(len=16) :: end_rule = 'settled'     !< 'settled': past that end until the outcome is settled | 'paper'
+    !> s, the paper's fixed end (the chaotic protocol's 3 ms); 0: &run end_time (which caps every rule)
+    real(wp) :: paper_end_time = 0.0_wp
+    !> s, how long a pair must stay bound for its 'agglomerated' to be settled (docs/theory.md, "Run outcome")
+    real(wp) :: settle_time = 1.0e-3_wp
     character(len=16) :: integrator = 'euler'     !< rigid-body update: 'euler' (paper) | 'verlet' (2nd order)
     !> Resolved fluid: the start velocities on top of the fluid's at each centre (and the angular
     !> velocity its local (1/2) curl u); centre = 'random' draws in the fluid's box (box_length unused)
@@ -44,12 +48,12 @@ module config_pair
 
   character(len=16) :: shape, orientation, approach, centre, integrator, end_rule, hydrodynamics_from
   real(wp) :: aspect_ratio, radius, density, axis1(3), angle1, axis2(3), angle2, approach_direction(3), &
-              gap, relative_speed, centre_position(3), box_length, gravity(3)
+              gap, relative_speed, centre_position(3), box_length, gravity(3), paper_end_time, settle_time
   logical :: mirror_first_collision, relative_to_fluid
   namelist /pair/ shape, aspect_ratio, radius, density, orientation, axis1, angle1, axis2, angle2, approach, &
                   approach_direction, gap, relative_speed, centre, centre_position, box_length, mirror_first_collision, &
                   integrator, end_rule, relative_to_fluid, hydrodynamics_from, &
-                  gravity
+                  gravity, paper_end_time, settle_time
 
 contains
 
@@ -62,7 +66,7 @@ contains
     centre_position = cfg%centre_position; box_length = cfg%box_length
     mirror_first_collision = cfg%mirror_first_collision; integrator = cfg%integrator; end_rule = cfg%end_rule
     relative_to_fluid = cfg%relative_to_fluid; hydrodynamics_from = cfg%hydrodynamics_from
-    gravity = cfg%gravity
+    gravity = cfg%gravity; paper_end_time = cfg%paper_end_time; settle_time = cfg%settle_time
   end subroutine to_namelist
 
   subroutine from_namelist(cfg)
@@ -74,7 +78,7 @@ contains
     cfg%centre_position = centre_position; cfg%box_length = box_length
     cfg%mirror_first_collision = mirror_first_collision; cfg%integrator = integrator; cfg%end_rule = end_rule
     cfg%relative_to_fluid = relative_to_fluid; cfg%hydrodynamics_from = hydrodynamics_from
-    cfg%gravity = gravity
+    cfg%gravity = gravity; cfg%paper_end_time = paper_end_time; cfg%settle_time = settle_time
   end subroutine from_namelist
 
   subroutine read_pair_group(deck, cfg)
@@ -117,6 +121,9 @@ contains
     call require_positive('pair', 'box_length', cfg%box_length)
     call require_option('pair', 'integrator', cfg%integrator, [character(len=8) :: 'euler', 'verlet'])
     call require_option('pair', 'end_rule', cfg%end_rule, [character(len=8) :: 'settled', 'paper'])
+    if (.not. (cfg%paper_end_time >= 0.0_wp)) call input_error('pair', 'paper_end_time', &
+        real_text(cfg%paper_end_time), '>= 0 s (0: &run end_time)')
+    if (.not. (cfg%settle_time >= 0.0_wp)) call input_error('pair', 'settle_time', real_text(cfg%settle_time), '>= 0 s')
     call require_option('pair', 'hydrodynamics_from', cfg%hydrodynamics_from, &
                         [character(len=13) :: 'start', 'first_contact'])
   end subroutine check_pair_group

@@ -2,9 +2,13 @@
 !> module pair_setup) and the pair's bookkeeping in the scene loop (module scene_loop): the
 !> collision events, the samples of particles.h5, the end rule and the outcome (module
 !> pair_outcome), the summary, and the loop's own checkpoint group (pair_scene).
-!> The run ends at &run end_time, or at twice the first-collision time (&pair
-!> mirror_first_collision, the paper's protocol), and with &pair end_rule = 'settled' not before the
-!> outcome is settled, at most at &run end_time.
+!> The paper's end is twice the first-collision time (&pair mirror_first_collision, the quiescent
+!> protocol) or &pair paper_end_time (the chaotic protocol's fixed 3 ms), whichever comes first;
+!> &pair end_rule = 'paper' stops there, 'settled' (default) goes on past it until the outcome is
+!> settled; &run end_time caps both. Contact episodes: an impulse of a pair not yet in contact opens
+!> one (an events row of particles.h5), the gap above the release gap closes it (module pair_outcome);
+!> every impulse in between (the resting contact held by its impulses) counts in summary
+!> collisions only.
 !> Checkpoints hold the particle system (group particles, module particle_system_checkpoint) and the
 !> loop's own state (group pair_scene); each is written after its step's events, sample and end
 !> test, so &run restart = .true. restores both and goes on with the next particle step, bit for bit
@@ -30,7 +34,8 @@ module pair_protocol
   use config_grid, only: smallest_spacing
   use particle_system, only: particle_models_t, particle_loads_t, particle_system_t, particle_system_create, &
                              pair_body_image
-  use pair_outcome, only: pair_outcome_t, pair_outcome_of, pair_outcome_rules_t, pair_outcome_rules_of
+  use pair_outcome, only: pair_outcome_t, pair_outcome_of, pair_outcome_rules_t, pair_outcome_rules_of, pair_state_t, &
+                          pair_state_of, pair_history_t, pair_history_record
   use particle_output, only: particle_output_t, pair_run_metadata_t, particle_record_t, pair_record_t, &
                              collision_event_t, run_summary_t, particle_output_open, &
                              particle_output_continue, particle_output_flush, particle_output_rows, &
@@ -50,6 +55,9 @@ module pair_protocol
     integer(i8) :: step = 0_i8
     real(wp) :: end_time = 0.0_wp             !< s: &run end_time, or twice the first-collision time
     real(wp) :: max_vdw_force = 0.0_wp        !< N, largest so far
+    type(pair_history_t) :: history           !< the pair protocol's record for its outcome
+    !> (2, k): first and second body of each pair in a contact episode now
+    integer, allocatable :: contact_pairs(:,:)
   end type pair_loop_t
 
 contains
@@ -76,6 +84,12 @@ contains
       call h5_write_array(file, 'pair_scene/step', loop%step)
       call h5_write_array(file, 'pair_scene/max_vdw_force', loop%max_vdw_force)
       call h5_write_array(file, 'pair_scene/collisions', summary%collisions)
+      call h5_write_array(file, 'pair_scene/contact_episodes', summary%contact_episodes)
+      ! A leading (0, 0) keeps the dataset non-empty when no pair is in contact.
+      call h5_write_array(file, 'pair_scene/contact_pairs', [0, 0, reshape(held_pairs(loop), [2 * held_count(loop)])])
+      call h5_write_array(file, 'pair_scene/outcome_record', [merge(1, 0, loop%history%touched), &
+          merge(1, 0, loop%history%entered_range), merge(1, 0, loop%history%bound)])
+      call h5_write_array(file, 'pair_scene/bound_since', loop%history%bound_since)
       call h5_write_array(file, 'pair_scene/has_first_collision', merge(1, 0, summary%has_first_collision))
       call h5_write_array(file, 'pair_scene/first_collision', [first%time, first%theta1, first%phi1, first%theta2, &
           first%phi2, first%normal_velocity_before, first%normal_velocity_after, first%psi])
@@ -98,16 +112,23 @@ contains
     type(particle_output_t), intent(out) :: output
     real(wp), allocatable :: first(:), force(:,:), torque(:,:)
     integer(i8), allocatable :: rows(:)
-    integer, allocatable :: bodies(:)
+    integer, allocatable :: bodies(:), held(:), record(:)
     integer :: flag
     if (.not. h5_exists(restart%file, 'pair_scene/step')) call fatal('checkpoint '//restart%path// &
         ' holds no pair scene (group pair_scene): &run restart must continue a run of the same scene')
+    if (.not. h5_exists(restart%file, 'pair_scene/contact_episodes')) call fatal('checkpoint '//restart%path// &
+        ': its pair_scene group has no contact episodes (pair_scene/contact_episodes): written by an older '// &
+        'version, it cannot be continued by this one')
     call read_particle_system_checkpoint(restart, system)
     associate (file => restart%file)
       call h5_read_scalar(file, 'pair_scene/time', loop%time)
       call h5_read_scalar(file, 'pair_scene/step', loop%step)
       call h5_read_scalar(file, 'pair_scene/max_vdw_force', loop%max_vdw_force)
       call h5_read_scalar(file, 'pair_scene/collisions', summary%collisions)
+      call h5_read_scalar(file, 'pair_scene/contact_episodes', summary%contact_episodes)
+      call h5_read_array(file, 'pair_scene/contact_pairs', held)
+      call h5_read_array(file, 'pair_scene/outcome_record', record)
+      call h5_read_scalar(file, 'pair_scene/bound_since', loop%history%bound_since)
       call h5_read_scalar(file, 'pair_scene/has_first_collision', flag)
       call h5_read_array(file, 'pair_scene/first_collision', first)
       call h5_read_array(file, 'pair_scene/first_collision_bodies', bodies)
@@ -116,8 +137,13 @@ contains
       call h5_read_array(file, 'pair_scene/output_rows', rows)
     end associate
     if (size(first) /= 8 .or. size(bodies) /= 2 .or. size(rows) /= 2 .or. any(shape(force) /= [3, system%n]) .or. &
-        any(shape(torque) /= [3, system%n])) call fatal('checkpoint '//restart%path// &
+        any(shape(torque) /= [3, system%n]) .or. size(held) < 2 .or. mod(size(held), 2) /= 0 .or. &
+        size(record) /= 3) call fatal('checkpoint '//restart%path// &
         ': its pair_scene group does not fit this scene (written by another version or deck?)')
+    loop%contact_pairs = reshape(held(3:), [2, size(held) / 2 - 1])
+    loop%history%touched = record(1) == 1
+    loop%history%entered_range = record(2) == 1
+    loop%history%bound = record(3) == 1
     summary%has_first_collision = (flag == 1)
     summary%first_collision = collision_event_t(time=first(1), theta1=first(2), phi1=first(3), theta2=first(4), &
         phi2=first(5), normal_velocity_before=first(6), normal_velocity_after=first(7), psi=first(8), &
@@ -195,8 +221,9 @@ contains
                                                    cfg%fluid%density * cfg%fluid%viscosity, smallest_spacing(cfg%grid))
   end function particle_models_of
 
-  !> After an interaction: the collision events of every pair (the pair protocol's first one may set
-  !> the paper's end time) and the largest vdW force so far.
+  !> After an interaction: the impulses and contact episodes of every pair (an episode's first
+  !> impulse is an events row; the pair protocol's first one may set the paper's end time), the
+  !> largest vdW force so far and, in the pair protocol, the pair's record for its outcome.
   subroutine record_interaction(cfg, system, loop, output, summary)
     type(agglo_config_t), intent(in) :: cfg
     type(particle_system_t), intent(in) :: system
@@ -204,29 +231,65 @@ contains
     type(particle_output_t), intent(inout) :: output
     type(run_summary_t), intent(inout) :: summary
     type(collision_event_t) :: event
-    integer :: p
+    type(pair_outcome_rules_t) :: rules
+    integer, allocatable :: held(:,:)
+    integer :: p, kept
+    logical :: was_held
+    rules = pair_outcome_rules_of(system%models, cfg%pair%settle_time)
+    if (.not. allocated(loop%contact_pairs)) allocate(loop%contact_pairs(2, 0))
+    allocate(held(2, size(system%pairs)))
+    kept = 0
     do p = 1, size(system%pairs)
       associate (pair => system%pairs(p), time => loop%time, end_time => loop%end_time, &
                  max_vdw_force => loop%max_vdw_force)
+        was_held = any(loop%contact_pairs(1, :) == pair%first .and. loop%contact_pairs(2, :) == pair%second)
         if (pair%collided) then
-          event = collision_event_t(time=time, theta1=pair%contact%theta1, phi1=pair%contact%phi1, &
-              theta2=pair%contact%theta2, phi2=pair%contact%phi2, &
-              normal_velocity_before=pair%collision%normal_velocity_before, &
-              normal_velocity_after=pair%collision%normal_velocity_after, &
-              psi=symmetry_axis_angle(system%bodies(pair%first)%quaternion, system%bodies(pair%second)%quaternion), &
-              first=pair%first, second=pair%second)
-          call append_collision_event(output, event)
           summary%collisions = summary%collisions + 1
-          if (summary%collisions == 1) then
-            summary%has_first_collision = .true.
-            summary%first_collision = event
-            if (mirrored(cfg)) end_time = min(end_time, 2.0_wp * time)
+          if (.not. was_held) then
+            event = collision_event_t(time=time, theta1=pair%contact%theta1, phi1=pair%contact%phi1, &
+                theta2=pair%contact%theta2, phi2=pair%contact%phi2, &
+                normal_velocity_before=pair%collision%normal_velocity_before, &
+                normal_velocity_after=pair%collision%normal_velocity_after, &
+                psi=symmetry_axis_angle(system%bodies(pair%first)%quaternion, system%bodies(pair%second)%quaternion), &
+                first=pair%first, second=pair%second)
+            call append_collision_event(output, event)
+            summary%contact_episodes = summary%contact_episodes + 1
+            if (summary%contact_episodes == 1) then
+              summary%has_first_collision = .true.
+              summary%first_collision = event
+              if (mirrored(cfg)) end_time = min(end_time, 2.0_wp * time)
+            end if
           end if
+        end if
+        ! In contact now: an impulse this step, or held before and not released (gap <= release gap).
+        if (pair%collided .or. (was_held .and. pair%active .and. pair%contact%gap <= rules%release_gap)) then
+          kept = kept + 1
+          held(:, kept) = [pair%first, pair%second]
         end if
         max_vdw_force = max(max_vdw_force, abs(pair%dlvo%vdw_force))
       end associate
     end do
+    loop%contact_pairs = held(:, 1:kept)
+    if (cfg%scene%particles == 'pair') call pair_history_record(loop%history, current_state(rules, system), &
+                                                                summary%contact_episodes > 0, loop%time)
   end subroutine record_interaction
+
+  !> The pairs in a contact episode now, (2, k), and k.
+  pure function held_pairs(loop) result(pairs)
+    type(pair_loop_t), intent(in) :: loop
+    integer, allocatable :: pairs(:,:)
+    if (allocated(loop%contact_pairs)) then
+      pairs = loop%contact_pairs
+    else
+      allocate(pairs(2, 0))
+    end if
+  end function held_pairs
+
+  pure integer function held_count(loop)
+    type(pair_loop_t), intent(in) :: loop
+    held_count = 0
+    if (allocated(loop%contact_pairs)) held_count = size(loop%contact_pairs, 2)
+  end function held_count
 
   !> The paper's end at twice the first-collision time: the pair protocol's (&pair mirror_first_collision).
   logical function mirrored(cfg)
@@ -234,34 +297,48 @@ contains
     mirrored = cfg%scene%particles == 'pair' .and. cfg%pair%mirror_first_collision
   end function mirrored
 
-  !> The end test after a step: the paper's end time (end_time: &run end_time, or twice the first
-  !> collision) or &run max_steps; with end_rule = 'settled', past the paper's end time only once the
-  !> outcome is settled or at &run end_time (the cap).
-  logical function run_finished(cfg, rules, system, summary, time, step, end_time)
+  !> The paper's end time: twice the first collision (loop%end_time, with &run end_time) and &pair
+  !> paper_end_time when set, whichever comes first.
+  real(wp) function paper_end(cfg, loop)
+    type(agglo_config_t), intent(in) :: cfg
+    type(pair_loop_t), intent(in) :: loop
+    paper_end = loop%end_time
+    if (cfg%pair%paper_end_time > 0.0_wp) paper_end = min(paper_end, cfg%pair%paper_end_time)
+  end function paper_end
+
+  !> The end test after a step: &run end_time (the cap of every rule) or max_steps; the paper's end
+  !> time (paper_end); with end_rule = 'settled', past the paper's end only once the outcome is
+  !> settled.
+  logical function run_finished(cfg, rules, system, loop, step)
     type(agglo_config_t), intent(in) :: cfg
     type(pair_outcome_rules_t), intent(in) :: rules
     type(particle_system_t), intent(in) :: system
-    type(run_summary_t), intent(in) :: summary
-    real(wp), intent(in) :: time, end_time
+    type(pair_loop_t), intent(in) :: loop
     integer(i8), intent(in) :: step
     type(pair_outcome_t) :: outcome
     run_finished = .true.
     if (step >= cfg%run%max_steps) return
-    if (time >= cfg%run%end_time * (1.0_wp - 1.0e-12_wp)) return
-    run_finished = time >= end_time * (1.0_wp - 1.0e-12_wp)
+    if (loop%time >= cfg%run%end_time * (1.0_wp - 1.0e-12_wp)) return
+    run_finished = loop%time >= paper_end(cfg, loop) * (1.0_wp - 1.0e-12_wp)
     if (.not. run_finished .or. cfg%pair%end_rule /= 'settled') return
-    outcome = current_outcome(rules, system, summary)
+    outcome = current_outcome(rules, system, loop)
     run_finished = outcome%settled
   end function run_finished
 
-  !> The outcome of the pair's current state (module pair_outcome).
-  type(pair_outcome_t) function current_outcome(rules, system, summary)
+  !> The state of the pair protocol's pair now (module pair_outcome).
+  type(pair_state_t) function current_state(rules, system)
     type(pair_outcome_rules_t), intent(in) :: rules
     type(particle_system_t), intent(in) :: system
-    type(run_summary_t), intent(in) :: summary
-    current_outcome = pair_outcome_of(rules, summary%collisions > 0, system%bodies(1), &
-        pair_body_image(system, system%pairs(the_pair)), system%pairs(the_pair)%contact, &
-        system%pairs(the_pair)%dlvo%chi_eta)
+    current_state = pair_state_of(rules, system%bodies(1), pair_body_image(system, system%pairs(the_pair)), &
+                                  system%pairs(the_pair)%contact, system%pairs(the_pair)%dlvo%chi_eta)
+  end function current_state
+
+  !> The outcome of the pair's current state and record (module pair_outcome).
+  type(pair_outcome_t) function current_outcome(rules, system, loop)
+    type(pair_outcome_rules_t), intent(in) :: rules
+    type(particle_system_t), intent(in) :: system
+    type(pair_loop_t), intent(in) :: loop
+    current_outcome = pair_outcome_of(rules, loop%history, current_state(rules, system), loop%time)
   end function current_outcome
 
   !> One row of particles.h5: every body and every pair record; with bodies_layout = .true. (a
@@ -347,9 +424,10 @@ contains
     type(pair_loop_t), intent(in) :: loop
     type(run_summary_t), intent(inout) :: summary
     type(pair_outcome_t) :: outcome
-    outcome = current_outcome(rules, system, summary)
+    outcome = current_outcome(rules, system, loop)
     summary%outcome = outcome%outcome
     summary%outcome_settled = outcome%settled
+    summary%ended_in_flight = .not. outcome%settled
     summary%end_rule = cfg%pair%end_rule
     summary%name = cfg%run%name
     summary%seed = int(cfg%run%seed, i8)
@@ -378,8 +456,9 @@ contains
     write(line, '(a,es11.4,a,a,a,es10.3,a,es11.4,a)') 'pair: relative speed ', cfg%pair%relative_speed, &
         ' m/s; fluid ''', trim(cfg%scene%fluid), '''; dt = ', cfg%run%dt, ' s; end time ', cfg%run%end_time, ' s'
     call log_line(trim(line))
-    write(line, '(a,a,a,es10.3,a,es10.3,a)') 'pair: end rule ''', trim(cfg%pair%end_rule), &
-        '''; outcome: in contact below a gap of ', rules%contact_gap, ' m, DLVO range ', rules%dlvo_range, ' m'
+    write(line, '(a,a,a,es10.3,a,es10.3,a,es10.3,a)') 'pair: end rule ''', trim(cfg%pair%end_rule), &
+        '''; outcome: DLVO range ', rules%dlvo_range, ' m, settled when bound for ', rules%settle_time, &
+        ' s; a contact episode ends above a gap of ', rules%release_gap, ' m'
     call log_line(trim(line))
   end subroutine log_pair
 

@@ -164,7 +164,7 @@ contains
           call build_pair(cfg%pair, cfg%run%seed, pair)
           call setup_system(cfg, pair, system)
         end if
-        rules = pair_outcome_rules_of(system%models)
+        rules = pair_outcome_rules_of(system%models, cfg%pair%settle_time)
         call log_pair(cfg, pair, rules)
       end if
       call hydrodynamics_of(cfg, solver, system, hydrodynamics)
@@ -307,7 +307,7 @@ contains
     !> end_time or max_steps.
     logical function end_rule()
       if (with_pair) then
-        end_rule = run_finished(cfg, rules, system, summary, loop%time, loop_step(), loop%end_time)
+        end_rule = run_finished(cfg, rules, system, loop, loop_step())
       else
         end_rule = loop_step() >= cfg%run%max_steps .or. loop%time >= cfg%run%end_time * (1.0_wp - 1.0e-12_wp)
       end if
@@ -389,8 +389,8 @@ contains
             min(real(cfg%run%max_steps - solver%step, wp), (loop%end_time - solver%time) / dt))
         context%step_wall = wall_time()
         if (with_pair) call log_line('  pair: gap = '//scientific_text(system%pairs(the_pair)%contact%gap)// &
-            ' m  v_n = '//scientific_text(normal_approach_speed(system, the_pair))//' m/s  collisions = '// &
-            int_text(summary%collisions))
+            ' m  v_n = '//scientific_text(normal_approach_speed(system, the_pair))//' m/s  contact episodes = '// &
+            int_text(summary%contact_episodes)//' (impulses '//int_text(summary%collisions)//')')
         if (with_particles .and. .not. with_pair) call log_line(bodies_progress_detail(system, summary%collisions))
         call hydrodynamics%log_progress(solver)
       end if

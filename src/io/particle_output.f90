@@ -92,10 +92,12 @@ module particle_output
     character(len=16) :: shape = ''
     real(wp) :: aspect_ratio = 1.0_wp
     character(len=24) :: fluid = ''
-    character(len=16) :: outcome = ''                 !< 'agglomerated' | 'rebounded' | 'no_contact'
+    character(len=16) :: outcome = ''                 !< 'agglomerated' | 'rebounded' | 'approached' | 'no_contact'
     logical :: outcome_settled = .false.              !< false: decided in flight (docs/theory.md, Run outcome)
+    logical :: ended_in_flight = .false.              !< the run ended with the outcome not settled
     character(len=16) :: end_rule = ''                !< &pair end_rule: 'settled' | 'paper'
-    integer :: collisions = 0
+    integer :: collisions = 0                         !< collision impulses (a resting contact: one per step)
+    integer :: contact_episodes = 0                   !< contact episodes (rows of /events)
     logical :: has_first_collision = .false.          !< false: "first_collision": null
     type(collision_event_t) :: first_collision
     real(wp) :: max_vdw_force = 0.0_wp                !< N
@@ -485,10 +487,10 @@ contains
     logical :: ok
     if (.not. is_root()) return
     select case (trim(summary%outcome))
-    case ('agglomerated', 'rebounded', 'no_contact')
+    case ('agglomerated', 'rebounded', 'approached', 'no_contact')
     case default
       call fatal('particle_output: summary outcome "'//trim(summary%outcome)// &
-                 '" is not agglomerated, rebounded or no_contact', collective=.false.)
+                 '" is not agglomerated, rebounded, approached or no_contact', collective=.false.)
     end select
     call json_add(object, 'name', trim(summary%name))
     call json_add(object, 'seed', summary%seed)
@@ -497,8 +499,10 @@ contains
     call json_add(object, 'fluid', trim(summary%fluid))
     call json_add(object, 'outcome', trim(summary%outcome))
     call json_add(object, 'outcome_settled', summary%outcome_settled)
+    call json_add(object, 'ended_in_flight', summary%ended_in_flight)
     call json_add(object, 'end_rule', trim(summary%end_rule))
     call json_add(object, 'collisions', summary%collisions)
+    call json_add(object, 'contact_episodes', summary%contact_episodes)
     if (summary%has_first_collision) then
       call json_add(first, 'time', summary%first_collision%time)
       call json_add(first, 'theta1', summary%first_collision%theta1)

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# checks: 37
+# checks: 39
 # Bad decks: each must stop the run with a non-zero exit and a message that names the group,
 # the variable and what is allowed (docs/design.md, "Errors"). Runs the built executable ($AGGLO).
 set -u
@@ -66,6 +66,10 @@ expect_error pair_needle_aspect_below_one 1 "$pair
 &pair shape = 'needle', aspect_ratio = 0.5 /" '&pair aspect_ratio' "> 1 and <= 2.00000E+01 for shape = 'needle'"
 expect_error pair_negative_speed 1 "$pair
 &pair relative_speed = -1.0e-3 /" '&pair relative_speed' '>= 0'
+expect_error pair_negative_settle_time 1 "$pair
+&pair settle_time = -1.0e-3 /" '&pair settle_time' '>= 0 s'
+expect_error pair_negative_paper_end_time 1 "$pair
+&pair paper_end_time = -3.0e-3 /" '&pair paper_end_time' '>= 0 s (0: &run end_time)'
 expect_error pair_zero_axis 1 "$pair
 &pair orientation = 'given', axis1 = 0.0, 0.0, 0.0 /" '&pair axis1' 'non-zero'
 expect_error pair_scene_cfl 1 "&run name = 'p', dt_mode = 'cfl' /

@@ -3,7 +3,9 @@
 It writes a run directory exactly in the layout of "Per-run outputs of the pair scenes"
 (run.nml, agglo.log, particles.h5, summary.json; docs/tools.md lists the fields) with made-up but
 self-consistent histories: a straight approach, a first collision, then either a bound pair or a
-rebound. The statistics tests (test_agglo_stats.py) use it to build batches whose outcomes are
+rebound; or an approach into the DLVO range without contact, then a retreat ('approached'); or an
+approach that stops short of the range ('no_contact'). legacy=True writes the summary.json of the
+code before contact episodes: no contact_episodes, ended_in_flight, outcome_settled, end_rule. The statistics tests (test_agglo_stats.py) use it to build batches whose outcomes are
 known exactly (counts, Wilson interval, CSV, figures), independent of the real code's physics.
 Every test of tools/montecarlo.sh and of statistics on real runs uses $AGGLO instead.
 
@@ -26,6 +28,9 @@ def _history(rng, outcome, end_time, rows):
     gap0, speed = 5.0e-6, 8.75e-4
     if outcome == "no_contact":              # closes a fifth of the gap, never touches
         contact_time, speed = 2.0 * end_time, 0.2 * gap0 / end_time
+    elif outcome == "approached":            # to 100 nm (inside the 182 nm range) at mid-run, then back
+        contact_time = 0.5 * end_time
+        speed = (gap0 - 1.0e-7) / contact_time
     else:                                    # contact within the first half of the run
         contact_time = min(gap0 / speed, 0.5 * end_time)
         speed = gap0 / contact_time
@@ -38,11 +43,14 @@ def _history(rng, outcome, end_time, rows):
     elif outcome == "rebounded":
         gap[after] = 0.4 * speed * (time_axis[after] - contact_time) + 1.0e-9
         velocity[after] = -0.4 * speed
+    elif outcome == "approached":
+        gap[after] = 1.0e-7 + 0.4 * speed * (time_axis[after] - contact_time)
+        velocity[after] = -0.4 * speed
     return time_axis, gap, velocity, contact_time, speed
 
 
 def write_run(directory, seed, shape="needle", outcome=None, fluid="none", name=None,
-              end_time=1.0e-2, rows=200, radius=5.0e-5):
+              end_time=1.0e-2, rows=200, radius=5.0e-5, legacy=False, in_flight=False):
     """Write a complete fake run into directory (created); returns the summary dict."""
     rng = np.random.default_rng(seed)
     if outcome is None:
@@ -85,7 +93,7 @@ def write_run(directory, seed, shape="needle", outcome=None, fluid="none", name=
         pair["relative_velocity"] = velocity
         pair["vdw_force"] = vdw
         events = h5.create_group("events")
-        collided = outcome != "no_contact"
+        collided = outcome in ("agglomerated", "rebounded")
         count = 1 if collided else 0
         events["time"] = np.full(count, contact_time)
         events["theta1"] = np.full(count, theta[0])
@@ -100,7 +108,7 @@ def write_run(directory, seed, shape="needle", outcome=None, fluid="none", name=
             h5.attrs[key] = value
     os.replace(os.path.join(directory, "particles.h5.tmp"), os.path.join(directory, "particles.h5"))
     first = None
-    if outcome != "no_contact":
+    if collided:
         first = {"time": contact_time, "theta1": theta[0], "phi1": phi[0], "theta2": theta[1],
                  "phi2": phi[1], "psi": psi_first, "normal_velocity_before": speed,
                  "normal_velocity_after": -0.4 * speed}
@@ -109,6 +117,9 @@ def write_run(directory, seed, shape="needle", outcome=None, fluid="none", name=
                "first_collision": first, "max_vdw_force": float(vdw.max()),
                "final_gap": float(gap[-1]), "final_relative_velocity": float(velocity[-1]),
                "psi_final": psi_first, "end_time": end_time, "steps": rows - 1, "wall_time": 0.01}
+    if not legacy:
+        summary.update(outcome_settled=not in_flight, ended_in_flight=in_flight, end_rule="settled",
+                       contact_episodes=count)
     with open(os.path.join(directory, "summary.json.tmp"), "w") as handle:
         json.dump(summary, handle)
     os.replace(os.path.join(directory, "summary.json.tmp"), os.path.join(directory, "summary.json"))

@@ -14,17 +14,18 @@ from fake_pair_scene import write_run
 FIGURES = ("separation_pdf", "relative_velocity_pdf", "max_vdw_force_pdf", "psi_pdf",
            "collision_points_pdf", "histories")
 
-# Outcomes per shape of the fake batch: (agglomerated, rebounded, no_contact).
-PLANNED = {"needle": (3, 2, 1), "disk": (4, 1, 0), "sphere": (0, 3, 0)}
+# Outcomes per shape of the fake batch: (agglomerated, rebounded, approached, no_contact).
+PLANNED = {"needle": (3, 2, 1, 1), "disk": (4, 1, 0, 0), "sphere": (0, 3, 0, 0)}
+CLASSES = ("agglomerated", "rebounded", "approached", "no_contact")
 
 
-def make_fake_batch(root, planned=PLANNED, fluid="none", first_seed=1):
+def make_fake_batch(root, planned=PLANNED, fluid="none", first_seed=1, legacy=False):
     seed = first_seed
     for shape, counts in planned.items():
-        for outcome, count in zip(("agglomerated", "rebounded", "no_contact"), counts):
+        for outcome, count in zip(CLASSES, counts):
             for _ in range(count):
                 write_run(os.path.join(root, f"run_{seed:04d}"), seed=seed, shape=shape,
-                          outcome=outcome, fluid=fluid, rows=60)
+                          outcome=outcome, fluid=fluid, rows=60, legacy=legacy)
                 seed += 1
     return seed - first_seed
 
@@ -41,19 +42,21 @@ def test_counts_rates_and_wilson_interval(spaced_tmp):
     assert result.returncode == 0, result.stderr
     rates = {row["group"]: row for row in read_csv(root / "stats" / "rates.csv")}
     assert sorted(rates) == sorted(PLANNED)
-    for shape, (agglomerated, rebounded, no_contact) in PLANNED.items():
+    for shape, counts in PLANNED.items():
         row = rates[shape]
-        runs = agglomerated + rebounded + no_contact
-        assert (int(row["runs"]), int(row["agglomerated"]), int(row["rebounded"]),
-                int(row["no_contact"])) == (runs, agglomerated, rebounded, no_contact)
-        assert float(row["rate"]) == pytest.approx(agglomerated / runs, rel=1e-12)
-        low, high = wilson_interval(agglomerated, runs)
+        runs = sum(counts)
+        assert int(row["runs"]) == runs
+        assert tuple(int(row[outcome]) for outcome in CLASSES) == counts
+        # 'approached' (in the DLVO range, never touched, escaped) counts as not agglomerated.
+        assert float(row["rate"]) == pytest.approx(counts[0] / runs, rel=1e-12)
+        low, high = wilson_interval(counts[0], runs)
         assert float(row["wilson_low"]) == pytest.approx(low, rel=1e-12, abs=1e-15)
         assert float(row["wilson_high"]) == pytest.approx(high, rel=1e-12)
-    # The printed table carries the same numbers: needle 3 of 6, Wilson [0.188, 0.812].
+        assert row["ended_in_flight"] == "0"
+    # The printed table carries the same numbers: needle 3 of 7 (Wilson 1927: [0.158, 0.750]).
     needle_line = next(line for line in result.stdout.splitlines() if line.startswith("needle"))
-    assert needle_line.split()[1:6] == ["6", "3", "2", "1", "0.500"]
-    assert "[0.188, 0.812]" in needle_line
+    assert needle_line.split()[1:7] == ["7", "3", "2", "1", "1", "0.429"]
+    assert "[0.158, 0.750]" in needle_line
 
 
 def test_csv_has_every_run(spaced_tmp):
@@ -75,6 +78,44 @@ def test_csv_has_every_run(spaced_tmp):
             assert float(row["phi2"]) == summary["first_collision"]["phi2"]
 
 
+def test_old_summaries_are_read(spaced_tmp):
+    """Summaries without contact_episodes, ended_in_flight, outcome_settled (and without
+    'approached'): the same counts and rates; episodes from particles.h5, in flight unknown."""
+    root = spaced_tmp / "old batch"
+    old = {"needle": (3, 2, 0, 1), "disk": (1, 1, 0, 0)}
+    total = make_fake_batch(str(root), old, legacy=True)
+    result = run_tool([AGGLO_STATS, root, "--no-figures"])
+    assert result.returncode == 0, result.stderr
+    rates = {row["group"]: row for row in read_csv(root / "stats" / "rates.csv")}
+    for shape, counts in old.items():
+        assert tuple(int(rates[shape][outcome]) for outcome in CLASSES) == counts
+        assert float(rates[shape]["rate"]) == pytest.approx(counts[0] / sum(counts), rel=1e-12)
+        assert rates[shape]["ended_in_flight"] == "0"
+    rows = read_csv(root / "stats" / "runs.csv")
+    assert len(rows) == total
+    for row in rows:
+        assert row["ended_in_flight"] == ""
+        assert row["contact_episodes"] == ("0" if row["outcome"] == "no_contact" else "1")
+
+
+def test_summary_episodes_and_in_flight_are_used(spaced_tmp):
+    """With contact_episodes in summary.json the table takes the code's count (one events row per
+    episode), not the history's grouping; ended_in_flight runs are counted per group."""
+    root = spaced_tmp / "batch"
+    write_run(str(root / "run_0001"), seed=1, shape="needle", outcome="agglomerated", rows=60)
+    write_run(str(root / "run_0002"), seed=2, shape="needle", outcome="approached", rows=60, in_flight=True)
+    path = root / "run_0001" / "summary.json"
+    summary = json.loads(path.read_text())
+    summary["contact_episodes"] = 3
+    path.write_text(json.dumps(summary))
+    assert run_tool([AGGLO_STATS, root, "--no-figures"]).returncode == 0
+    runs = {row["run"]: row for row in read_csv(root / "stats" / "runs.csv")}
+    assert runs["run_0001"]["contact_episodes"] == "3"
+    assert runs["run_0002"]["contact_episodes"] == "0" and runs["run_0002"]["ended_in_flight"] == "True"
+    rate = read_csv(root / "stats" / "rates.csv")[0]
+    assert (rate["agglomerated"], rate["approached"], rate["ended_in_flight"]) == ("1", "1", "1")
+
+
 def test_figures_are_written(spaced_tmp):
     root = spaced_tmp / "batch"
     make_fake_batch(str(root))
@@ -90,8 +131,8 @@ def test_figures_are_written(spaced_tmp):
 
 
 def test_two_fluids_are_compared_and_batches_merged(spaced_tmp):
-    make_fake_batch(str(spaced_tmp / "none"), {"needle": (2, 1, 0)}, fluid="none")
-    make_fake_batch(str(spaced_tmp / "stokes"), {"needle": (0, 0, 3)}, fluid="stokes", first_seed=10)
+    make_fake_batch(str(spaced_tmp / "none"), {"needle": (2, 1, 0, 0)}, fluid="none")
+    make_fake_batch(str(spaced_tmp / "stokes"), {"needle": (0, 0, 0, 3)}, fluid="stokes", first_seed=10)
     out = spaced_tmp / "stats"
     assert run_tool([AGGLO_STATS, spaced_tmp / "none", spaced_tmp / "stokes", "-o", out,
                      "--no-figures"]).returncode == 0

@@ -25,7 +25,7 @@ def floor_share(root, floor):
 
 
 def test_separation_pdf_marks_the_default_detection_floor(spaced_tmp):
-    make_fake_batch(str(spaced_tmp), {"disk": (4, 1, 0)})
+    make_fake_batch(str(spaced_tmp), {"disk": (4, 1, 0, 0)})
     result = run_tool([AGGLO_STATS, spaced_tmp])
     assert result.returncode == 0, result.stderr
     share = floor_share(spaced_tmp, 1.0e-9)
@@ -41,7 +41,7 @@ def test_detection_floor_read_from_each_run_nml(spaced_tmp):
         floor = "2.0000000000000000E-009" if seed < 3 else "5.0000000000000001E-010"
         (run / "run.nml").write_text(f"&RUN\n NAME=\"run_{seed:04d}\",\n /\n&COLLISION\n"
                                      f" DETECTION_FLOOR=  {floor}     ,\n /\n")
-    make_fake_batch(str(spaced_tmp), {"needle": (3, 0, 0)})
+    make_fake_batch(str(spaced_tmp), {"needle": (3, 0, 0, 0)})
     result = run_tool([AGGLO_STATS, spaced_tmp])
     assert result.returncode == 0, result.stderr
     marks = re.findall(r"detection floor (\S+) nm", result.stdout)
@@ -49,7 +49,7 @@ def test_detection_floor_read_from_each_run_nml(spaced_tmp):
 
 
 def test_few_samples_are_warned_per_figure(spaced_tmp):
-    make_fake_batch(str(spaced_tmp), {"needle": (3, 2, 1)})
+    make_fake_batch(str(spaced_tmp), {"needle": (3, 2, 0, 1)})
     result = run_tool([AGGLO_STATS, spaced_tmp])
     assert result.returncode == 0, result.stderr
     warnings = [line for line in result.stdout.splitlines() if line.startswith("warning: ")]
@@ -61,7 +61,7 @@ def test_few_samples_are_warned_per_figure(spaced_tmp):
 
 
 def test_no_warning_from_30_samples_on(spaced_tmp):
-    make_fake_batch(str(spaced_tmp), {"disk": (FEW_SAMPLES, 0, 0)})
+    make_fake_batch(str(spaced_tmp), {"disk": (FEW_SAMPLES, 0, 0, 0)})
     result = run_tool([AGGLO_STATS, spaced_tmp])
     assert result.returncode == 0, result.stderr
     assert "warning:" not in result.stdout, result.stdout
@@ -104,7 +104,7 @@ def test_resolved_fluid_run_is_named(spaced_tmp):
 
 
 def test_resolved_fluid_run_beside_pair_runs_is_skipped_by_name(spaced_tmp):
-    make_fake_batch(str(spaced_tmp), {"disk": (1, 1, 0)})
+    make_fake_batch(str(spaced_tmp), {"disk": (1, 1, 0, 0)})
     write_fake_fluid_run(spaced_tmp / "box")
     result = run_tool([AGGLO_STATS, spaced_tmp, "--no-figures"])
     assert result.returncode == 0, result.stderr

@@ -198,7 +198,7 @@ def test_real_batch_statistics(real_batch, tmp_path):
     header, values = rows[0].split(","), rows[1].split(",")
     row = dict(zip(header, values))
     assert row["shape"] == summaries[0]["shape"] and int(row["runs"]) == 4
-    for outcome in ("agglomerated", "rebounded", "no_contact"):
+    for outcome in ("agglomerated", "rebounded", "approached", "no_contact"):
         assert int(row[outcome]) == sum(s["outcome"] == outcome for s in summaries), outcome
     low, high = wilson_interval(int(row["agglomerated"]), 4)
     assert float(row["wilson_low"]) == pytest.approx(low, abs=1e-15)

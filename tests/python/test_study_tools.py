@@ -75,13 +75,14 @@ def test_lever_arm_of_a_contact():
 def make_illustration_batch(root):
     """Disk runs: 1-2 plain agglomerated, 3 agglomerated after a separation (two episodes),
     4-5 rebounded with contacts away from the rim, 6 rebounded at 0.05 rad from the rim, 7
-    rebounded and carried 100 um by a common drift of both particles."""
+    rebounded and carried 100 um by a common drift of both particles. Summaries without
+    contact_episodes (legacy): the table groups the events rows by the sampled gap."""
     directories = {}
     plan = ["agglomerated", "agglomerated", "agglomerated", "rebounded", "rebounded", "rebounded",
             "rebounded"]
     for seed, outcome in enumerate(plan, start=1):
         directory = os.path.join(root, f"run_{seed:04d}")
-        write_run(directory, seed=seed, shape="disk", outcome=outcome, rows=200)
+        write_run(directory, seed=seed, shape="disk", outcome=outcome, rows=200, legacy=True)
         directories[seed] = directory
         if outcome == "rebounded":
             edit_summary(directory, phi1=0.5, phi2=-0.4)

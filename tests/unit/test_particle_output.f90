@@ -128,14 +128,15 @@ program test_particle_output
 
   ! summary.json
   summary = run_summary_t(name='pair "1" \ test', seed=1234567890123_i8, shape='disk', aspect_ratio=0.2_wp, &
-                          fluid='none', outcome='agglomerated', outcome_settled=.true., end_rule='settled', &
-                          collisions=3, has_first_collision=.true., &
+                          fluid='none', outcome='agglomerated', outcome_settled=.true., ended_in_flight=.false., &
+                          end_rule='settled', collisions=3, contact_episodes=2, has_first_collision=.true., &
                           first_collision=written_events(3), max_vdw_force=1.234567890123456789e-9_wp, final_gap=-2.0e-9_wp, &
                           final_relative_velocity=0.0_wp, psi_final=1.0_wp / 3.0_wp, end_time=2.0e-3_wp, &
                           steps=20000_i8, wall_time=0.25_wp)
   call write_summary_json('test_summary.json', summary)
   summary%has_first_collision = .false.
-  summary%outcome = 'no_contact'
+  summary%outcome = 'approached'
+  summary%ended_in_flight = .true.
   call write_summary_json('test_summary_none.json', summary)
   if (is_root()) then
     call check(.not. file_exists('test_summary.json.tmp'), 'summary_tmp_renamed')
@@ -153,13 +154,14 @@ program test_particle_output
                     round_trip_literal(written_events(3)%theta1)//' and f["psi"] == 0.25'
     write(i, '(a)') 'assert f["normal_velocity_before"] == 1e-3 and f["normal_velocity_after"] == -0.5e-3'
     write(i, '(a)') 'assert s["outcome_settled"] is True and s["end_rule"] == "settled"'
-    write(i, '(a)') 'keys = ["name", "seed", "shape", "aspect_ratio", "fluid", "outcome", "outcome_settled", "end_rule",'
-    write(i, '(a)') '        "collisions", "first_collision",'
+    write(i, '(a)') 'assert s["ended_in_flight"] is False and s["contact_episodes"] == 2'
+    write(i, '(a)') 'keys = ["name", "seed", "shape", "aspect_ratio", "fluid", "outcome", "outcome_settled",'
+    write(i, '(a)') '        "ended_in_flight", "end_rule", "collisions", "contact_episodes", "first_collision",'
     write(i, '(a)') '        "max_vdw_force", "final_gap", "final_relative_velocity", "psi_final", "end_time", "steps",'
     write(i, '(a)') '        "wall_time"]'
     write(i, '(a)') 'assert list(s) == keys, list(s)'
     write(i, '(a)') 'n = json.load(open("test_summary_none.json"))'
-    write(i, '(a)') 'assert n["first_collision"] is None and n["outcome"] == "no_contact"'
+    write(i, '(a)') 'assert n["first_collision"] is None and n["outcome"] == "approached" and n["ended_in_flight"] is True'
     write(i, '(a)') 'print("summary ok")'
     close(i)
     call execute_command_line('python3 check_summary.py', exitstat=status)

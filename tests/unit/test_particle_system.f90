@@ -19,7 +19,8 @@ program test_particle_system
   use broad_phase, only: all_near_pairs
   use collision, only: collision_setup
   use pair_setup, only: pair_t, build_pair
-  use pair_outcome, only: pair_outcome_t, pair_outcome_of, pair_outcome_rules_of
+  use pair_outcome, only: pair_outcome_t, pair_outcome_of, pair_outcome_rules_of, pair_outcome_rules_t, pair_state_t, &
+                          pair_state_of, pair_history_t, pair_history_record
   use particle_system, only: particle_models_t, particle_system_t, particle_system_create, particle_system_interact, &
                              particle_system_step, particle_system_energy, unwrapped_position, &
                              pair_body_image, particle_interaction_gap, particle_system_step
@@ -243,14 +244,26 @@ contains
     call check_below(force_error, 1.0e-7_wp, 'straddling_pair_same_dlvo_force')
     call check(first_inside > 0 .and. first_across == first_inside, 'straddling_pair_same_first_collision_step')
     call check_equal(collisions_across, collisions_inside, 'straddling_pair_same_collision_count')
-    outcome_inside = pair_outcome_of(pair_outcome_rules_of(inside%models), collisions_inside > 0, inside%bodies(1), &
-        pair_body_image(inside, inside%pairs(1)), inside%pairs(1)%contact, inside%pairs(1)%dlvo%chi_eta)
-    outcome_across = pair_outcome_of(pair_outcome_rules_of(across%models), collisions_across > 0, across%bodies(1), &
-        pair_body_image(across, across%pairs(1)), across%pairs(1)%contact, across%pairs(1)%dlvo%chi_eta)
+    outcome_inside = outcome_now(inside, collisions_inside > 0)
+    outcome_across = outcome_now(across, collisions_across > 0)
     call check(outcome_inside%outcome == outcome_across%outcome .and. &
                (outcome_inside%settled .eqv. outcome_across%settled), 'straddling_pair_same_outcome', &
                trim(outcome_inside%outcome)//' / '//trim(outcome_across%outcome))
   end subroutine pair_across_the_boundary
+
+  !> The outcome of a two-body system's pair from its current state alone (touched: it has collided).
+  type(pair_outcome_t) function outcome_now(system, touched)
+    type(particle_system_t), intent(in) :: system
+    logical, intent(in) :: touched
+    type(pair_outcome_rules_t) :: rules
+    type(pair_state_t) :: state
+    type(pair_history_t) :: history
+    rules = pair_outcome_rules_of(system%models)
+    state = pair_state_of(rules, system%bodies(1), pair_body_image(system, system%pairs(1)), system%pairs(1)%contact, &
+                          system%pairs(1)%dlvo%chi_eta)
+    call pair_history_record(history, state, touched, 0.0_wp)
+    outcome_now = pair_outcome_of(rules, history, state, 0.0_wp)
+  end function outcome_now
 
   !> n steps + save + restore into a fresh system + n steps = 2n steps, bit for bit (the restarted
   !> run does the same operations on the same stored values), for a needle pair with DLVO and
