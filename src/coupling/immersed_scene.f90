@@ -17,7 +17,7 @@ module immersed_scene
   use error_handling, only: fatal
   use parallel_env, only: is_root
   use logger, only: log_line
-  use fluid_monitor, only: drop_rows_after
+  use text_series, only: drop_rows_after
   use text_format, only: real_text, int_text
   use timer_registry, only: timer_register, timer_tic, timer_toc
   use fluid_grid, only: fluid_grid_t, allocate_field
