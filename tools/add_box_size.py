@@ -3,7 +3,7 @@
 A field file (a field snapshot fields_<step>.h5: fields/u, v, w, grid/shape, grid/lengths; or a
 final_field.h5 or a checkpoint: fluid/u, v, w, fluid/grid_shape, fluid/box_length) carries the box
 lengths it was computed in, and the code refuses to start from a file whose box is not the deck's
-&grid (src/driver/fluid_restart.f90). Files written before the box was stored lack that dataset
+&grid (src/fluid/fluid_restart.f90). Files written before the box was stored lack that dataset
 and are refused with a message that names this tool. Given the box the file was computed in (the
 &grid length_x, length_y, length_z of the run that wrote it: its run.nml), the tool adds
 grid/lengths (snapshot) or fluid/box_length (final field, checkpoint) as 3 float64 values in m,
@@ -20,7 +20,7 @@ import sys
 import h5py
 import numpy as np
 
-BOX_TOLERANCE = 1.0e-12   # relative, as src/driver/fluid_restart.f90 (box_tolerance)
+BOX_TOLERANCE = 1.0e-12   # relative, as src/fluid/fluid_restart.f90 (box_tolerance)
 
 
 class Refusal(Exception):

@@ -52,7 +52,7 @@ import numpy as np
 OFFSETS = {"u": (1.0, 0.5, 0.5), "v": (0.5, 1.0, 0.5), "w": (0.5, 0.5, 1.0), "pressure": (0.5, 0.5, 0.5)}
 MIN_CELLS = 4
 MAX_CELLS = 1290          # fluid_grid_t%cells_total is a default integer (src/fluid/fluid_grid.f90)
-BOX_TOLERANCE = 1.0e-12   # relative, as src/driver/fluid_restart.f90 (box_tolerance)
+BOX_TOLERANCE = 1.0e-12   # relative, as src/fluid/fluid_restart.f90 (box_tolerance)
 
 
 class Refusal(Exception):

@@ -32,7 +32,7 @@ module oscillating_sphere_case
   use fluid_solver, only: fluid_solver_t, fluid_solver_create
   use spheroid, only: make_spheroid
   use immersed_boundary, only: ibm_settings_t
-  use immersed_scene, only: prescribed_motion_t, immersed_scene_t, immersed_scene_create, immersed_step
+  use immersed_scene, only: prescribed_motion_t, immersed_scene_t, immersed_scene_options_t, immersed_scene_create, immersed_step
   implicit none
   private
   public :: oscillating_sphere_case_t, oscillating_sphere_result_t, run_oscillating_sphere, stokes_oscillating_force
@@ -128,7 +128,7 @@ contains
     settings%max_sweeps = 100
     settings%fluid_density = density
     solver%time = 0.25_wp * period
-    call immersed_scene_create(scene, solver, motion, settings, [0.0_wp, 0.0_wp, 0.0_wp])
+    call immersed_scene_create(scene, solver, motion, immersed_scene_options_t(settings=settings))
     scene%extend_pressure = case%extend_pressure
 
     steps = case%periods * result%steps_per_period

@@ -43,7 +43,7 @@ module sphere_array_case
   use quaternion, only: quaternion_from_axis_angle
   use immersed_boundary, only: ibm_settings_t
   use hypre_solver, only: linear_solver_config_t
-  use immersed_scene, only: prescribed_motion_t, immersed_scene_t, immersed_scene_create, immersed_step
+  use immersed_scene, only: prescribed_motion_t, immersed_scene_t, immersed_scene_options_t, immersed_scene_create, immersed_step
   implicit none
   private
   public :: sphere_array_case_t, sphere_array_result_t, run_sphere_array, fit_power_series
@@ -155,8 +155,9 @@ contains
       ! Omega a = 1e-7 m/s: Re = Omega a^2 / nu below 1e-4.
       motion(1)%angular_velocity = case%rotation_axis / norm2(case%rotation_axis) * 1.0e-7_wp / radius
     end if
-    call immersed_scene_create(scene, solver, motion, settings, [drive_x, 0.0_wp, 0.0_wp], &
-                               surface_level=case%surface_level, predictor_config=case%predictor)
+    call immersed_scene_create(scene, solver, motion, immersed_scene_options_t(settings=settings, &
+                               driving_force=[drive_x, 0.0_wp, 0.0_wp], surface_level=case%surface_level, &
+                               predictor_config=case%predictor))
     ! The centre never moves; a turning spheroid keeps its initial classification (frozen geometry).
     scene%moving = .false.
 

@@ -38,7 +38,7 @@ module squeeze_case
   use fluid_solver, only: fluid_solver_t, fluid_solver_create
   use spheroid, only: spheroid_t, make_spheroid
   use immersed_boundary, only: ibm_settings_t
-  use immersed_scene, only: prescribed_motion_t, immersed_scene_t, immersed_scene_create, immersed_step
+  use immersed_scene, only: prescribed_motion_t, immersed_scene_t, immersed_scene_options_t, immersed_scene_create, immersed_step
   use forcing_driver, only: forcing_driver_t
   use rigid_body, only: rigid_body_t, rigid_body_of_spheroid, integrator_euler
   use particle_system, only: particle_system_t, particle_models_t, particle_loads_t, particle_system_create, &
@@ -222,7 +222,7 @@ contains
     settings%fluid_density = density
     dt = case%viscous_number * h**2 / viscosity
     call hold_in_place(solver%time + dt)
-    call immersed_scene_create(scene, solver, held, settings, [0.0_wp, 0.0_wp, 0.0_wp])
+    call immersed_scene_create(scene, solver, held, immersed_scene_options_t(settings=settings))
 
     force_old = 0
     force_new = 0

@@ -1,32 +1,16 @@
 !> Immersed-boundary geometry: classification of the staggered (MAC) velocity nodes of each component
 !> into fluid, ghost and interior nodes for N spheroids in the periodic box, and for every ghost node
-!> its closest surface point, normal, image point and the trilinear interpolation stencil of the
-!> image point on the component's own grid (docs/theory.md, "Immersed boundary geometry").
+!> its record (closest surface point, normal, image point and the trilinear interpolation stencil of
+!> the image point on the component's own grid: module ghost_records) (docs/theory.md, "Immersed
+!> boundary geometry").
 !>
 !> - A node is solid when it lies strictly inside a body (implicit function < 0, at the periodic
 !>   minimum image of node - centre). It belongs to the body whose surface is nearest among those
 !>   that contain it (only overlapping bodies contain a node twice).
 !> - Ghost: a solid node with at least one fluid node among its 6 neighbours on the same
 !>   component's grid. Interior: every other solid node. Fluid: not solid.
-!> - Ghost node G, closest surface point B, outward normal n, d_G = |G - B|: image point
-!>   M = B + d_M n, with d_M = d_G (the pure mirror, M = 2B - G: the exterior point of the paper's
-!>   Eq. 7, u_G = 2 u_IB - u_E, after Mark & van Wachem 2008) or d_M = max(d_G, image_distance_cells
-!>   h_max) (the image point of the explicit coupling).
-!>   The ghost condition is u_G = u_B - kappa (u_M - u_B), kappa = d_G/d_M.
-!> - If the segment from B to M enters another body (a gap below about two cells), M is moved back
-!>   along n to the middle of the gap, d_M = s/2 with s the distance from B to the other body
-!>   along n, and kappa = d_G/d_M (linear extrapolation); such nodes are flagged and counted. If B
-!>   itself lies inside another body (overlapping bodies), M = B and kappa = 0: the ghost takes the
-!>   surface velocity.
-!> - Below the saturation gap s_min (saturation_gap_cells h_max) the grid resolves nothing of the
-!>   film, and kappa = d_G/(s/2) would grow without bound: the row then leaves the fluid out
-!>   (kappa = 0) and takes the Couette profile between B and the other body's surface point
-!>   B' = B + s n, saturated at s_min: u_G = u_B - c (u_B' - u_B), c = d_G/max(s, s_min), with
-!>   u_B' the other body's rigid velocity at B' (the couette_gain, opposite_body and opposite_point
-!>   of the record; flagged `saturated` and counted as well as fallback).
-!> - u_M = sum_c w_c u_c over the 8 nodes of the component's grid cell that contains M (trilinear);
-!>   they may include ghost nodes, interior nodes and G itself, whose weight the implicit ghost
-!>   row moves to the diagonal: (1 + kappa w_G) u_G = (1 + kappa) u_B - kappa sum_{c /= G} w_c u_c.
+!> The node records' types are immersed_nodes' (re-exported here, with node_position and
+!> thin_dimension_cells), so a user of the geometry needs this module only.
 !>
 !> Work per body (options%band): the exact tests run only where a cheap one cannot decide, so the
 !> classification gives the nodes and records of the full one (every node of each body's bounding
@@ -57,80 +41,19 @@ module immersed_geometry
   use agglo_kinds, only: wp
   use error_handling, only: fatal
   use periodic_box, only: minimum_image
-  use fluid_grid, only: fluid_grid_t, x_centre, y_centre, z_centre, x_face, y_face, z_face
+  use fluid_grid, only: fluid_grid_t
   use quaternion, only: rotate_to_body, rotation_matrix
-  use spheroid, only: spheroid_t, implicit_function, support_value
-  use spheroid_distance, only: surface_projection_t, lab_closest_point, body_closest_point
-  use icosphere_mesh, only: icosphere_mesh_t
-  use mesh_distance, only: mesh_contains, mesh_lab_closest_point
+  use spheroid, only: implicit_function, support_value
+  use spheroid_distance, only: surface_projection_t, body_closest_point
+  use mesh_distance, only: mesh_contains
+  use immersed_nodes, only: immersed_body_t, immersed_options_t, ghost_node_t, component_nodes_t, node_position, &
+                            thin_dimension_cells, wrap, node_fluid, node_ghost, node_interior
+  use ghost_records, only: build_ghost_record
   implicit none
   private
   public :: immersed_body_t, immersed_options_t, ghost_node_t, component_nodes_t, immersed_geometry_t
   public :: classify_nodes, node_position, thin_dimension_cells, fallback_count, saturated_count
   public :: node_fluid, node_ghost, node_interior
-
-  integer(int8), parameter :: node_fluid = 0_int8, node_ghost = 1_int8, node_interior = 2_int8
-
-  !> One rigid body as the geometry sees it.
-  type :: immersed_body_t
-    type(spheroid_t) :: shape                  !< semi-axes (spheroid.f90)
-    real(wp) :: centre(3) = 0.0_wp             !< m, lab frame (any periodic image)
-    real(wp) :: orientation(4) = [1.0_wp, 0.0_wp, 0.0_wp, 0.0_wp]   !< unit quaternion, body -> lab
-    !> &bodies geometry = 'mesh': solid test, B and n from this triangulation (mesh_distance); level -1: analytic
-    type(icosphere_mesh_t) :: mesh
-  end type immersed_body_t
-
-  !> How the image point is placed.
-  type :: immersed_options_t
-    character(len=16) :: image_point = 'mirror'  !< 'mirror': d_M = d_G; 'image': d_M = max(d_G, image_distance_cells h_max)
-    real(wp) :: image_distance_cells = 1.5_wp    !< cells (of the largest spacing), for 'image'
-    !> cells (of the largest spacing): a fallback row whose gap s is below this takes the saturated Couette value
-    real(wp) :: saturation_gap_cells = 0.5_wp
-    !> .true.: the exact tests only where they can decide (see "Work per body" above); .false.: every
-    !> node of each body's bounding box and every other body (the reference: the same nodes and records)
-    logical :: band = .true.
-  end type immersed_options_t
-
-  !> A ghost node of one velocity component, with everything its ghost row needs.
-  type :: ghost_node_t
-    integer :: node(3) = 0                 !< i, j global; k local to this rank's slab (1..nz_local)
-    integer :: body = 0                    !< index of the body it belongs to
-    real(wp) :: position(3) = 0.0_wp       !< m, G
-    real(wp) :: surface_point(3) = 0.0_wp  !< m, B, in the periodic image frame of G
-    real(wp) :: normal(3) = 0.0_wp         !< outward unit normal at B
-    real(wp) :: distance = 0.0_wp          !< m, d_G = |G - B|
-    real(wp) :: image_point(3) = 0.0_wp    !< m, M = B + d_M n, in the periodic image frame of G
-    real(wp) :: image_distance = 0.0_wp    !< m, d_M = |M - B|
-    real(wp) :: extrapolation = 0.0_wp     !< kappa = d_G/d_M (1 for the pure mirror; 0 when M = B)
-    logical :: fallback = .false.          !< M moved back because the image segment entered another body
-    !> fallback row with 0 < s < s_min: u_G = u_B - couette_gain (u_B' - u_B), no fluid node (kappa = 0)
-    logical :: saturated = .false.
-    integer :: opposite_body = 0           !< the other body of a saturated row (its B'), else 0
-    real(wp) :: opposite_point(3) = 0.0_wp !< m, B' = B + s n, in the periodic image frame of G (saturated rows)
-    real(wp) :: couette_gain = 0.0_wp      !< c = d_G/max(s, s_min) (saturated rows), else 0
-    integer :: lower_offset(3) = 0         !< index of the stencil's lower corner minus the index of G
-    integer :: stencil(3, 8) = 0           !< global i, j, k of the 8 nodes, wrapped into 1..n
-    real(wp) :: weight(8) = 0.0_wp         !< trilinear weights (sum 1)
-    integer(int8) :: stencil_status(8) = node_fluid   !< node_fluid, node_ghost or node_interior
-    logical :: stencil_local(8) = .false.  !< the node is in this rank's planes
-    integer :: stencil_ghost(8) = 0        !< its index in this component's ghost list (local ghosts), else 0
-    integer :: self_corner = 0             !< the corner that is G itself (its weight w_G), 0 if none
-  end type ghost_node_t
-
-  !> Classification of one velocity component's nodes on this rank.
-  type :: component_nodes_t
-    integer :: component = 0                       !< 1 = u (x faces), 2 = v (y faces), 3 = w (z faces)
-    !> node_fluid/ghost/interior over the field layout (0:nx+1, 0:ny+1, 0:nz_local+1), halos included
-    integer(int8), allocatable :: status(:, :, :)
-    integer :: n_ghost = 0, n_interior = 0
-    type(ghost_node_t), allocatable :: ghost(:)     !< (n_ghost)
-    integer, allocatable :: interior(:, :)          !< (3, n_interior): i, j global, k local
-    integer, allocatable :: interior_body(:)        !< (n_interior)
-    integer :: n_fallback = 0                      !< ghosts whose image point was moved back (another body)
-    integer :: n_overlap = 0                       !< ghosts whose surface point lies inside another body
-    integer :: n_saturated = 0                     !< fallback ghosts below the saturation gap (Couette rows)
-    integer :: halo_planes_needed = 0              !< planes beyond this rank's slab that the stencils reach
-  end type component_nodes_t
 
   !> Work arrays of the classification, kept between calls so that a reclassification (every step
   !> of a moving body) neither allocates nor sweeps the whole slab: between calls every entry is
@@ -153,23 +76,6 @@ module immersed_geometry
 
 contains
 
-  !> Position (m) of node (i, j, k) of velocity component `component` (1 u, 2 v, 3 w), i and j
-  !> global, k local to this rank (any integers: the positions continue beyond the box).
-  pure function node_position(grid, component, i, j, k) result(x)
-    type(fluid_grid_t), intent(in) :: grid
-    integer, intent(in) :: component, i, j, k
-    real(wp) :: x(3)
-    x = [x_centre(grid, i), y_centre(grid, j), z_centre(grid, k)]
-    select case (component)
-    case (1)
-      x(1) = x_face(grid, i)
-    case (2)
-      x(2) = y_face(grid, j)
-    case (3)
-      x(3) = z_face(grid, k)
-    end select
-  end function node_position
-
   !> Ghost nodes of this rank (all three components) whose image point was moved back because its
   !> segment entered another body (the fallback of the module header; overlaps included).
   pure integer function fallback_count(geometry)
@@ -183,16 +89,6 @@ contains
     type(immersed_geometry_t), intent(in) :: geometry
     saturated_count = sum(geometry%component(:)%n_saturated)
   end function saturated_count
-
-  !> Thinnest dimension of a body (2 min(a, b)) in cells of the largest grid spacing: the ghost
-  !> layers of two opposite faces overlap when it is small (the disk of r = 50 um, aspect 5, is 2.2
-  !> cells thick at 64^3 in a 1 mm box).
-  pure function thin_dimension_cells(shape, grid) result(cells)
-    type(spheroid_t), intent(in) :: shape
-    type(fluid_grid_t), intent(in) :: grid
-    real(wp) :: cells
-    cells = 2.0_wp * min(shape%a, shape%b) / max(grid%dx, grid%dy, grid%dz)
-  end function thin_dimension_cells
 
   !> Classify the nodes of u, v and w on this rank for the bodies and build the ghost records.
   subroutine classify_nodes(grid, bodies, options, geometry)
@@ -666,141 +562,5 @@ contains
       end do
     end associate
   end subroutine mark_solid_nodes
-
-  !> Closest point, normal, image point (with the other-body fallback) and trilinear stencil of
-  !> one ghost node. status covers (1:nx, 1:ny, k_lo:) in extended local k.
-  subroutine build_ghost_record(grid, bodies, options, component, status, k_lo, ghost_index, others, ghost)
-    type(fluid_grid_t), intent(in) :: grid
-    type(immersed_body_t), intent(in) :: bodies(:)
-    type(immersed_options_t), intent(in) :: options
-    integer, intent(in) :: component, k_lo
-    integer(int8), intent(in) :: status(:, :, k_lo:)
-    integer, intent(in) :: ghost_index(:, :, :)  !< (nx, ny, nz_local) index of each local ghost node, else 0
-    integer, intent(in) :: others(:)             !< the bodies the fallback test tries (fallback_candidates)
-    type(ghost_node_t), intent(inout) :: ghost
-    type(surface_projection_t) :: projection
-    real(wp) :: box(3), spacing(3), centre(3), nearest_entry, entry, saturation_gap, fraction(3), t(3), w(0:1, 3)
-    integer :: n, m, corner, bits(3), node(3), d, nearest_body
-
-    box = [grid%lx, grid%ly, grid%lz]
-    spacing = [grid%dx, grid%dy, grid%dz]
-    ghost%position = node_position(grid, component, ghost%node(1), ghost%node(2), ghost%node(3))
-    associate (body => bodies(ghost%body))
-      ! The image of the body's centre nearest to G: everything below is in G's image frame.
-      centre = ghost%position - minimum_image(ghost%position - body%centre, box)
-      if (body%mesh%level >= 0) then
-        projection = mesh_lab_closest_point(body%mesh, centre, body%orientation, ghost%position)
-      else
-        projection = lab_closest_point(body%shape, centre, body%orientation, ghost%position)
-      end if
-    end associate
-    ghost%surface_point = projection%point
-    ghost%normal = projection%normal
-    ! |d|: G is inside by the implicit function; the computed distance can only be off by round-off.
-    ghost%distance = abs(projection%signed_distance)
-    if (trim(options%image_point) == 'image') then
-      ghost%image_distance = max(ghost%distance, options%image_distance_cells * maxval(spacing))
-    else
-      ghost%image_distance = ghost%distance
-    end if
-
-    ! Fallback: the segment B -> B + d_M n must not enter another body; if it does, M goes to the
-    ! middle of the gap to the nearest body along n.
-    nearest_entry = huge(1.0_wp)
-    nearest_body = 0
-    do m = 1, size(others)
-      n = others(m)
-      entry = segment_entry(bodies(n), box, ghost%surface_point, ghost%normal, ghost%image_distance)
-      if (entry < nearest_entry) then
-        nearest_entry = entry
-        nearest_body = n
-      end if
-    end do
-    ghost%fallback = nearest_entry < ghost%image_distance
-    if (ghost%fallback) ghost%image_distance = 0.5_wp * nearest_entry
-    ghost%image_point = ghost%surface_point + ghost%image_distance * ghost%normal
-    if (ghost%image_distance > 0.0_wp) then
-      ghost%extrapolation = ghost%distance / ghost%image_distance
-    else
-      ghost%extrapolation = 0.0_wp
-    end if
-    ! Saturation: below s_min the midpoint row's gain 2 d_G/s would feed the fluid next to the gap
-    ! back into the explicit Laplacian without bound; the row takes the Couette profile of the two
-    ! surfaces instead (no fluid node; equal to the midpoint row for a linear gap profile at s_min).
-    ! An overlap (s = 0) keeps u_G = u_B.
-    saturation_gap = options%saturation_gap_cells * maxval(spacing)
-    ghost%saturated = ghost%fallback .and. nearest_entry > 0.0_wp .and. nearest_entry < saturation_gap
-    if (ghost%saturated) then
-      ghost%opposite_body = nearest_body
-      ghost%opposite_point = ghost%surface_point + nearest_entry * ghost%normal
-      ghost%couette_gain = ghost%distance / saturation_gap
-      ghost%extrapolation = 0.0_wp
-    else
-      ghost%opposite_body = 0
-      ghost%opposite_point = 0.0_wp
-      ghost%couette_gain = 0.0_wp
-    end if
-
-    ! Trilinear stencil of M, located relative to G in index space (no wrap of positions needed).
-    fraction = real(ghost%node, wp) + (ghost%image_point - ghost%position) / spacing
-    ghost%lower_offset = floor(fraction) - ghost%node
-    t = fraction - floor(fraction)
-    do d = 1, 3
-      w(0, d) = 1.0_wp - t(d)
-      w(1, d) = t(d)
-    end do
-    ghost%self_corner = 0
-    do corner = 1, 8
-      bits = [mod(corner - 1, 2), mod((corner - 1) / 2, 2), (corner - 1) / 4]
-      node = ghost%node + ghost%lower_offset + bits     ! i, j unwrapped; k local, extended
-      ghost%weight(corner) = w(bits(1), 1) * w(bits(2), 2) * w(bits(3), 3)
-      ghost%stencil(:, corner) = [wrap(node(1), grid%nx), wrap(node(2), grid%ny), &
-                                  wrap(grid%z_offset + node(3), grid%nz)]
-      ghost%stencil_status(corner) = status(ghost%stencil(1, corner), ghost%stencil(2, corner), node(3))
-      ghost%stencil_local(corner) = node(3) >= 1 .and. node(3) <= grid%nz_local
-      ghost%stencil_ghost(corner) = 0
-      if (ghost%stencil_local(corner) .and. ghost%stencil_status(corner) == node_ghost) &
-        ghost%stencil_ghost(corner) = ghost_index(ghost%stencil(1, corner), ghost%stencil(2, corner), node(3))
-      if (all(bits + ghost%lower_offset == 0)) ghost%self_corner = corner
-    end do
-  end subroutine build_ghost_record
-
-  !> Distance s in [0, length] along the ray b + s n at which it first enters `body` (the periodic
-  !> image nearest b), or huge if it does not within length. 0 if b is inside the body.
-  function segment_entry(body, box, b, n, length) result(entry)
-    type(immersed_body_t), intent(in) :: body
-    real(wp), intent(in) :: box(3), b(3), n(3), length
-    real(wp) :: entry, y0(3), m(3), inverse_squares(3), qa, qb, qc, discriminant, root
-    entry = huge(1.0_wp)
-    ! Quick rejection: the segment cannot reach the body's bounding sphere.
-    y0 = minimum_image(b - body%centre, box)
-    if (norm2(y0) > max(body%shape%a, body%shape%b) + length) return
-    y0 = rotate_to_body(body%orientation, y0)
-    m = rotate_to_body(body%orientation, n)
-    inverse_squares = [1.0_wp / body%shape%a**2, 1.0_wp / body%shape%b**2, 1.0_wp / body%shape%b**2]
-    ! F(y0 + s m) = qa s^2 + 2 qb s + qc (implicit function along the ray).
-    qa = sum(inverse_squares * m**2)
-    qb = sum(inverse_squares * y0 * m)
-    qc = sum(inverse_squares * y0**2) - 1.0_wp
-    if (qc < 0.0_wp) then
-      entry = 0.0_wp
-      return
-    end if
-    discriminant = qb**2 - qa * qc
-    if (discriminant < 0.0_wp .or. qb >= 0.0_wp) return    ! misses, or moves away (qc >= 0)
-    ! Smaller root of qa s^2 + 2 qb s + qc with qb < 0, in the cancellation-free form.
-    root = qc / (-qb + sqrt(discriminant))
-    if (root <= length) entry = root
-  end function segment_entry
-
-  !> Periodic index in 1..n.
-  elemental integer function wrap(i, n)
-    integer, intent(in) :: i, n
-    if (i >= 1 .and. i <= n) then   ! most indices: no integer division
-      wrap = i
-    else
-      wrap = modulo(i - 1, n) + 1
-    end if
-  end function wrap
 
 end module immersed_geometry

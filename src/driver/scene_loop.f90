@@ -41,8 +41,9 @@ module scene_loop
   use fluid_diagnostics, only: fluid_statistics_t, compute_fluid_statistics, advective_rate
   use time_step_control, only: next_time_step, explicit_viscous_limit
   use time_step_guard, only: check_time_step
-  use fluid_restart, only: write_fluid_checkpoint, write_fluid_snapshot
-  use body_surface_output, only: body_pose_t
+  use fluid_restart, only: write_fluid_checkpoint, begin_fluid_snapshot
+  use field_output, only: field_snapshot_t, field_snapshot_end
+  use body_surface_output, only: body_pose_t, field_snapshot_add_bodies
   use fluid_monitor, only: statistics_open, statistics_write, statistics_close, progress_line, timing_report
   use run_context, only: run_context_t, run_context_start
   use forcing_driver, only: forcing_driver_t, forcing_driver_start, forcing_driver_power_input, &
@@ -416,14 +417,14 @@ contains
     !> than surface_bodies_most bodies: the fluid alone; its bodies are in particles.h5).
     subroutine output_fields()
       type(body_pose_t), allocatable :: poses(:)
+      type(field_snapshot_t) :: snapshot
       call timer_tic(context%timers%fields)
       if (.not. (with_suspension .and. system%n > surface_bodies_most)) &
         call hydrodynamics%body_poses(solver, system, poses)
-      if (allocated(poses)) then
-        call write_fluid_snapshot(solver, poses)
-      else
-        call write_fluid_snapshot(solver)
-      end if
+      call begin_fluid_snapshot(snapshot, solver)
+      if (allocated(poses)) &
+        call field_snapshot_add_bodies(snapshot, poses, [solver%grid%lx, solver%grid%ly, solver%grid%lz])
+      call field_snapshot_end(snapshot)
       call timer_toc(context%timers%fields)
     end subroutine output_fields
 

@@ -6,14 +6,19 @@ module initial_fields
   use random_stream, only: random_stream_t, stream_seed, stream_normal
   use parallel_env, only: global_sum
   use fluid_grid, only: fluid_grid_t, allocate_field, exchange_halos, x_centre, y_centre, x_face, y_face
-  use poisson_fft, only: spectral_filter
+  use poisson_fft, only: spectral_filter, spectral_weight_t
   use fluid_solver, only: fluid_solver_t, fluid_exchange_velocity
   implicit none
   private
   public :: set_rest, set_taylor_green, taylor_green_exact, set_random_field, random_stream_id
 
   integer, parameter :: random_stream_id = 1     !< stream of the fluid's initial field (docs/design.md, "Conventions")
-  real(wp) :: filter_peak = 1.0_wp               !< 1/m, peak wavenumber seen by random_filter_weight
+  !> The random field's filter exp(-(|k|/k_p)^2).
+  type, extends(spectral_weight_t) :: gaussian_filter_t
+    real(wp) :: peak = 1.0_wp                    !< 1/m, k_p
+  contains
+    procedure :: weight => gaussian_weight
+  end type gaussian_filter_t
 
 contains
 
@@ -69,6 +74,7 @@ contains
     real(wp), intent(in) :: amplitude        !< m/s, rms of one velocity component
     real(wp), intent(in) :: peak_wavenumber  !< 1/m, peak of the energy spectrum
     type(random_stream_t) :: stream
+    type(gaussian_filter_t) :: filter
     real(wp), allocatable :: ax(:, :, :), ay(:, :, :), az(:, :, :)
     real(wp) :: gx, gy, gz, rms, idx, idy, idz
     integer :: i, j, k, kg
@@ -86,10 +92,10 @@ contains
           end do
         end do
       end do
-      filter_peak = peak_wavenumber
-      call spectral_filter(solver%poisson, ax, random_filter_weight)
-      call spectral_filter(solver%poisson, ay, random_filter_weight)
-      call spectral_filter(solver%poisson, az, random_filter_weight)
+      filter%peak = peak_wavenumber
+      call spectral_filter(solver%poisson, ax, filter)
+      call spectral_filter(solver%poisson, ay, filter)
+      call spectral_filter(solver%poisson, az, filter)
       call exchange_halos(grid, ax); call exchange_halos(grid, ay); call exchange_halos(grid, az)
       idx = 1.0_wp / grid%dx; idy = 1.0_wp / grid%dy; idz = 1.0_wp / grid%dz
       do k = 1, grid%nz_local
@@ -114,8 +120,9 @@ contains
     call fluid_exchange_velocity(solver)
   end subroutine set_random_field
 
-  pure real(wp) function random_filter_weight(wavenumber)
+  pure real(wp) function gaussian_weight(self, wavenumber)
+    class(gaussian_filter_t), intent(in) :: self
     real(wp), intent(in) :: wavenumber
-    random_filter_weight = exp(-(wavenumber / filter_peak)**2)
-  end function random_filter_weight
+    gaussian_weight = exp(-(wavenumber / self%peak)**2)
+  end function gaussian_weight
 end module initial_fields

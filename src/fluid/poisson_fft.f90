@@ -25,14 +25,21 @@ module poisson_fft
   implicit none
   private
   public :: poisson_fft_t, poisson_create, poisson_destroy, poisson_solve, poisson_solve_in_buffer, &
-            helmholtz_solve, helmholtz_solve_in_buffer, spectral_filter, fft_round_trip, spectral_weight, forward
+            helmholtz_solve, helmholtz_solve_in_buffer, spectral_filter, fft_round_trip, spectral_weight_t, forward
 
-  !> A weight as a function of the physical wavenumber magnitude |k| (1/m), for spectral_filter.
+  !> A weight as a function of the physical wavenumber magnitude |k| (1/m), for spectral_filter; an
+  !> extension holds the weight's parameters (a filter's width), so none is kept in module state.
+  type, abstract :: spectral_weight_t
+  contains
+    procedure(weight_at), deferred :: weight
+  end type spectral_weight_t
+
   abstract interface
-    pure real(wp) function spectral_weight(wavenumber)
-      import :: wp
-      real(wp), intent(in) :: wavenumber
-    end function spectral_weight
+    pure real(wp) function weight_at(self, wavenumber)
+      import :: wp, spectral_weight_t
+      class(spectral_weight_t), intent(in) :: self
+      real(wp), intent(in) :: wavenumber   !< 1/m
+    end function weight_at
   end interface
 
   type :: poisson_fft_t
@@ -238,14 +245,14 @@ contains
   subroutine spectral_filter(solver, field, weight)
     type(poisson_fft_t), intent(inout) :: solver
     real(wp), intent(inout) :: field(0:, 0:, 0:)
-    procedure(spectral_weight) :: weight
+    class(spectral_weight_t), intent(in) :: weight
     integer :: i, j, k
     call forward(solver, field)
     do j = 1, solver%ny_local
       do k = 1, solver%nz
         do i = 1, solver%nx_complex
           solver%spectral_view(i, k, j) = solver%spectral_view(i, k, j) * &
-              weight(sqrt(solver%wave_x(i)**2 + solver%wave_y(j)**2 + solver%wave_z(k)**2))
+              weight%weight(sqrt(solver%wave_x(i)**2 + solver%wave_y(j)**2 + solver%wave_z(k)**2))
         end do
       end do
     end do

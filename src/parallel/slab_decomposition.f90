@@ -29,7 +29,6 @@ module slab_decomposition
   end type slab_t
 
   integer, parameter, public :: max_halo_fields = 3
-  logical :: fftw_mpi_started = .false.
 
 contains
 
@@ -40,10 +39,9 @@ contains
     integer, intent(in) :: nx, ny, nz
     integer(c_intptr_t) :: local_n0, local_0_start, local_n1, local_1_start
     character(len=160) :: text
-    if (.not. fftw_mpi_started) then
-      call fftw_mpi_init()
-      fftw_mpi_started = .true.
-    end if
+    ! Needed before any other FFTW-MPI call; further calls have no effect (FFTW manual, "MPI
+    ! Initialization"), so no flag records the first.
+    call fftw_mpi_init()
     slab%nx = nx; slab%ny = ny; slab%nz = nz
     ! FFTW takes dimensions in C order (slowest first): (nz, ny, nx/2 + 1) complex for r2c.
     slab%complex_alloc = fftw_mpi_local_size_3d_transposed(int(nz, c_intptr_t), int(ny, c_intptr_t), &

@@ -1,6 +1,6 @@
 """Synthetic field files for the tests of tools/regrid_field.py and of the study scripts: a random
 velocity made discretely divergence-free on its staggered grid (as a converged field of the code
-is), written in the layout of the code's final_field.h5 (src/driver/forcing_driver.f90,
+is), written in the layout of the code's final_field.h5 (src/fluid/forcing_driver.f90,
 forcing_driver_finish). A fixture, not a flow: the forcing state is a made-up word sequence."""
 import h5py
 import numpy as np

@@ -1,5 +1,5 @@
 """tools/add_box_size.py (launcher tools/add-box-size): the box lengths written into a field file
-that lacks them, in the dataset the code reads (src/driver/fluid_restart.f90: grid/lengths of a
+that lacks them, in the dataset the code reads (src/fluid/fluid_restart.f90: grid/lengths of a
 field snapshot, fluid/box_length of a final field or checkpoint), nothing else changed; refusals
 of a file that says another box, of a file without a field and of a malformed --box. The code's own
 acceptance of the result is tested end to end in tests/decks/test_deck_limits.sh."""

@@ -15,7 +15,7 @@ program test_immersed_forced_step
   use spheroid, only: make_spheroid
   use immersed_geometry, only: node_fluid
   use immersed_boundary, only: ibm_settings_t
-  use immersed_scene, only: prescribed_motion_t, immersed_scene_t, immersed_scene_create, immersed_step
+  use immersed_scene, only: prescribed_motion_t, immersed_scene_t, immersed_scene_options_t, immersed_scene_create, immersed_step
   use test_framework, only: test_start, test_finish, check_below, check_above
   implicit none
   real(wp), parameter :: density = 997.0_wp, drive(3) = [5.0_wp, 0.0_wp, -2.0_wp]   ! N/m^3
@@ -40,7 +40,7 @@ program test_immersed_forced_step
   motion(2)%centre = [0.7e-3_wp, 0.65e-3_wp, 0.8e-3_wp]
   motion(2)%velocity = [2.0e-3_wp, 0.0_wp, 1.0e-3_wp]
   settings%fluid_density = density
-  call immersed_scene_create(scene, solver, motion, settings, drive)
+  call immersed_scene_create(scene, solver, motion, immersed_scene_options_t(settings=settings, driving_force=drive))
   call allocate_field(solver%grid, fx); call allocate_field(solver%grid, fy); call allocate_field(solver%grid, fz)
   fx = fluid_force(1); fy = fluid_force(2); fz = fluid_force(3)
   call immersed_step(scene, solver, 1.0e-5_wp, fx, fy, fz)

@@ -28,7 +28,7 @@ program test_immersed_cn
   use spheroid, only: make_spheroid
   use immersed_boundary, only: ibm_settings_t, rigid_velocity
   use fluid_solver, only: fluid_predict
-  use immersed_scene, only: prescribed_motion_t, immersed_scene_t, immersed_scene_create, immersed_step
+  use immersed_scene, only: prescribed_motion_t, immersed_scene_t, immersed_scene_options_t, immersed_scene_create, immersed_step
   use immersed_predictor, only: default_predictor_config, immersed_predictor_reclassified
   use sphere_array_case, only: sphere_array_case_t, sphere_array_result_t, run_sphere_array
   use test_framework, only: test_start, test_finish, check, check_close, check_below
@@ -114,8 +114,8 @@ contains
     motion(2)%angular_velocity = [1.0_wp, 4.0_wp, 2.0_wp]
     settings%coupling = 'implicit'
     settings%fluid_density = fluid_cfg%density
-    call immersed_scene_create(scene, solver, motion, settings, [2.0_wp, 0.0_wp, 0.0_wp], &
-                               predictor_config=default_predictor_config(1.0e-12_wp, 200))
+    call immersed_scene_create(scene, solver, motion, immersed_scene_options_t(settings=settings, &
+                               driving_force=[2.0_wp, 0.0_wp, 0.0_wp], predictor_config=default_predictor_config(1.0e-12_wp, 200)))
     dt = 10.0_wp * solver%grid%dx**2 / fluid_cfg%viscosity
     scene%predictor%ibm => scene%ibm
     call fluid_predict(solver, dt, scene%predictor, force_u=scene%force_u, force_v=scene%force_v, &
@@ -196,7 +196,8 @@ contains
     settings%fluid_density = fluid_cfg%density
     ! At the default predictor_tolerance (1e-8) the budget closes to that order (the fluid rows'
     ! residual); at 1e-11 it closes to round-off level.
-    call immersed_scene_create(scene, solver, motion, settings, drive, predictor_config=default_predictor_config(1.0e-11_wp, 200))
+    call immersed_scene_create(scene, solver, motion, immersed_scene_options_t(settings=settings, driving_force=drive, &
+                               predictor_config=default_predictor_config(1.0e-11_wp, 200)))
     dt = 2.0_wp * solver%grid%dx**2 / fluid_cfg%viscosity
     worst = 0
     do step = 1, 10
@@ -269,8 +270,9 @@ contains
     do s = 1, 2
       call fluid_solver_create(solver(s), grid_cfg, fluid_cfg)
       solver(s)%u = 0; solver(s)%v = 0; solver(s)%w = 0; solver(s)%pressure = 0
-      call immersed_scene_create(scene(s), solver(s), motion, settings, [2.0_wp, 0.5_wp, 0.0_wp], &
-                                 predictor_config=default_predictor_config(1.0e-12_wp, 200))
+      call immersed_scene_create(scene(s), solver(s), motion, immersed_scene_options_t(settings=settings, &
+                                 driving_force=[2.0_wp, 0.5_wp, 0.0_wp], &
+                                 predictor_config=default_predictor_config(1.0e-12_wp, 200)))
     end do
   end subroutine twin_sphere_scenes
 

@@ -17,7 +17,7 @@ program test_immersed_stokes
   use fluid_solver, only: fluid_solver_t, fluid_solver_create
   use spheroid, only: make_spheroid
   use immersed_boundary, only: ibm_settings_t
-  use immersed_scene, only: prescribed_motion_t, immersed_scene_t, immersed_scene_create, immersed_step
+  use immersed_scene, only: prescribed_motion_t, immersed_scene_t, immersed_scene_options_t, immersed_scene_create, immersed_step
   use sphere_array_case, only: sphere_array_case_t, sphere_array_result_t, run_sphere_array
   use test_framework, only: test_start, test_finish, check, check_close, check_below
   implicit none
@@ -91,7 +91,7 @@ contains
     motion(2)%angular_velocity = [0.0_wp, 20.0_wp, 10.0_wp]
     settings%coupling = coupling
     settings%fluid_density = fluid_cfg%density
-    call immersed_scene_create(scene, solver, motion, settings, drive)
+    call immersed_scene_create(scene, solver, motion, immersed_scene_options_t(settings=settings, driving_force=drive))
     dt = 0.1_wp * solver%grid%dx**2 / fluid_cfg%viscosity
     worst = 0
     changes = 0

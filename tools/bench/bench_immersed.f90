@@ -41,7 +41,7 @@ program bench_immersed
   use immersed_imposition, only: ibm_impose
   use immersed_loads, only: ibm_begin_step, ibm_step_loads
   use immersed_diagnostics, only: cell_divergence_max
-  use immersed_scene, only: prescribed_motion_t, immersed_scene_t, immersed_scene_create, immersed_step, &
+  use immersed_scene, only: prescribed_motion_t, immersed_scene_t, immersed_scene_options_t, immersed_scene_create, immersed_step, &
                             motion_body, motion_velocity
   implicit none
   integer, parameter :: n_parts = 6
@@ -92,8 +92,9 @@ program bench_immersed
   settings%fluid_density = density
   settings%tolerance = 1.0e-12_wp
   settings%max_sweeps = 50
-  call immersed_scene_create(scene, coupled, motion, settings, drive)
-  call immersed_scene_create(parts_scene, parts_solver, motion, settings, drive)
+  call immersed_scene_create(scene, coupled, motion, immersed_scene_options_t(settings=settings, driving_force=drive))
+  call immersed_scene_create(parts_scene, parts_solver, motion, immersed_scene_options_t(settings=settings, &
+                             driving_force=drive))
 
   call fluid_step()         ! warm-up (the first step is the Euler start)
   call immersed_step(scene, coupled, dt)

@@ -24,7 +24,7 @@ program bench_immersed_cn
   use spheroid, only: make_spheroid
   use hypre_solver, only: linear_solver_config_t
   use immersed_boundary, only: ibm_settings_t
-  use immersed_scene, only: prescribed_motion_t, immersed_scene_t, immersed_scene_create, immersed_step
+  use immersed_scene, only: prescribed_motion_t, immersed_scene_t, immersed_scene_options_t, immersed_scene_create, immersed_step
   use sphere_array_case, only: sphere_array_case_t, sphere_array_result_t, run_sphere_array
   implicit none
   real(wp), parameter :: zick_homsy_0125 = 4.292_wp
@@ -119,7 +119,8 @@ contains
     config%preconditioner = preconditioner
     config%tolerance = 1.0e-8_wp     ! &fluid predictor_tolerance's default
     config%max_iterations = 500
-    call immersed_scene_create(scene, solver, motion, settings, [2.5e-3_wp, 1.0e-3_wp, 0.0_wp], predictor_config=config)
+    call immersed_scene_create(scene, solver, motion, immersed_scene_options_t(settings=settings, &
+                               driving_force=[2.5e-3_wp, 1.0e-3_wp, 0.0_wp], predictor_config=config))
     iterations = 0
     most = 0
     cpu_start = 0
@@ -197,7 +198,8 @@ contains
     settings%coupling = 'implicit'
     settings%max_sweeps = 100
     settings%fluid_density = density
-    call immersed_scene_create(scene, solver, motion, settings, [drive, 0.0_wp, 0.0_wp])
+    call immersed_scene_create(scene, solver, motion, immersed_scene_options_t(settings=settings, &
+                               driving_force=[drive, 0.0_wp, 0.0_wp]))
     dt = number * solver%grid%dx**2 / viscosity
     allocate(velocity(max_steps), cpu(max_steps))
     call cpu_time(t0)

@@ -18,11 +18,11 @@ module prescribed_hydrodynamics
   use checkpoint_files, only: checkpoint_t
   use particle_output, only: particle_output_t, particle_output_flush, particle_output_close
   use body_surface_output, only: body_pose_t
-  use immersed_boundary, only: ibm_settings_t
   use immersed_diagnostics, only: status_change_summary
   use immersed_geometry, only: fallback_count, saturated_count, immersed_body_t
   use immersed_predictor, only: default_predictor_config
-  use immersed_scene, only: immersed_scene_t, immersed_scene_create, immersed_step, motions_from_config, &
+  use immersed_scene, only: immersed_scene_t, immersed_scene_options_t, immersed_scene_create, immersed_step, &
+                            motions_from_config, &
                             loads_open, loads_write, loads_close, motion_body
   use bodies_particle_output, only: bodies_output_open, bodies_output_row
   use particle_hydrodynamics, only: particle_hydrodynamics_t
@@ -57,17 +57,16 @@ contains
     type(prescribed_hydrodynamics_t), intent(out) :: provider
     type(agglo_config_t), intent(in) :: cfg
     type(fluid_solver_t), intent(inout) :: solver
-    type(ibm_settings_t) :: settings
-    settings%coupling = cfg%scene%ibm_coupling
-    settings%tolerance = cfg%bodies%ghost_tolerance
-    settings%max_sweeps = cfg%bodies%max_sweeps
-    settings%fluid_density = cfg%fluid%density
-    call immersed_scene_create(provider%bodies, solver, motions_from_config(cfg%bodies, solver%grid), settings, &
-                               cfg%bodies%driving_force, cfg%bodies%load_method, &
-                               merge(cfg%bodies%mesh_level, -1, cfg%bodies%load_method == 'surface' .or. &
-                                     cfg%bodies%compare_loads), &
-                               predictor_config=default_predictor_config(cfg%fluid%predictor_tolerance, &
-                               cfg%fluid%predictor_max_iterations))
+    type(immersed_scene_options_t) :: options
+    options%settings%coupling = cfg%scene%ibm_coupling
+    options%settings%tolerance = cfg%bodies%ghost_tolerance
+    options%settings%max_sweeps = cfg%bodies%max_sweeps
+    options%settings%fluid_density = cfg%fluid%density
+    options%driving_force = cfg%bodies%driving_force
+    options%load_method = cfg%bodies%load_method
+    if (cfg%bodies%load_method == 'surface' .or. cfg%bodies%compare_loads) options%surface_level = cfg%bodies%mesh_level
+    options%predictor_config = default_predictor_config(cfg%fluid%predictor_tolerance, cfg%fluid%predictor_max_iterations)
+    call immersed_scene_create(provider%bodies, solver, motions_from_config(cfg%bodies, solver%grid), options)
     call loads_open(provider%bodies, run_file('bodies_loads.dat'), append=cfg%run%restart, last_step=solver%step)
     call bodies_output_open(provider%output, run_file('particles.h5'), cfg%bodies, cfg%run%name, &
                             int(cfg%run%seed, i8), cfg%run%restart, solver%step)

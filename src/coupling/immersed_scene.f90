@@ -17,14 +17,14 @@ module immersed_scene
   use error_handling, only: fatal
   use parallel_env, only: is_root
   use logger, only: log_line
-  use fluid_monitor, only: drop_rows_after
+  use text_series, only: drop_rows_after
   use text_format, only: real_text, int_text
   use timer_registry, only: timer_register, timer_tic, timer_toc
   use fluid_grid, only: fluid_grid_t, allocate_field
   use fluid_solver, only: fluid_solver_t, fluid_predict, fluid_project, fluid_finish_step
   use hypre_solver, only: linear_solver_config_t
   use immersed_predictor, only: immersed_predictor_t, immersed_predictor_create, immersed_predictor_reclassified, &
-                                immersed_predictor_first_guess, default_predictor_config
+                                immersed_predictor_first_guess
   use quaternion, only: quaternion_from_axis_angle, quaternion_product, quaternion_normalise
   use spheroid, only: spheroid_t, make_spheroid
   use icosphere_mesh, only: icosphere_mesh_t, build_icosphere_mesh
@@ -39,8 +39,8 @@ module immersed_scene
   use immersed_pressure_extension, only: ibm_extend_pressure
   implicit none
   private
-  public :: prescribed_motion_t, immersed_scene_t, immersed_scene_create, immersed_step, motion_body, &
-            motion_velocity, loads_open, loads_write, loads_close, motions_from_config
+  public :: prescribed_motion_t, immersed_scene_t, immersed_scene_options_t, immersed_scene_create, immersed_step, &
+            immersed_step_placed, motion_body, motion_velocity, loads_open, loads_write, loads_close, motions_from_config
 
   !> One body's shape and prescribed rigid motion.
   type :: prescribed_motion_t
@@ -53,6 +53,22 @@ module immersed_scene
     real(wp) :: frequency = 0                  !< Hz, f of the oscillation
     type(icosphere_mesh_t) :: mesh             !< &bodies geometry = 'mesh': the ghost nodes' surface (level -1: analytic)
   end type prescribed_motion_t
+
+  !> How the scene is built (immersed_scene_create).
+  type :: immersed_scene_options_t
+    type(ibm_settings_t) :: settings           !< the imposition (coupling, ghost tolerance, sweeps, fluid density)
+    real(wp) :: driving_force(3) = 0           !< N/m^3, uniform body force on the whole box (mean pressure gradient)
+    !> Which loads are written as the force and torque: 'momentum' (the imposition's momentum
+    !> balance) | 'surface' (the face sum, which then needs surface_level >= 0)
+    character(len=16) :: load_method = 'momentum'
+    !> The face sum's icosphere level (20 4^level faces; 2: 320 faces); -1: no face sum, its columns
+    !> zero. It costs about 2 us per face per step (8 trilinear evaluations of the probes), so it is
+    !> computed only when asked for; a level with 'momentum' computes both side by side.
+    integer :: surface_level = -1
+    !> The hypre solve of the Crank-Nicolson predictor with the body rows (unused with explicit diffusion)
+    type(linear_solver_config_t) :: predictor_config = linear_solver_config_t(method='bicgstab', &
+        preconditioner='user', tolerance=1.0e-8_wp, max_iterations=200)
+  end type immersed_scene_options_t
 
   type :: immersed_scene_t
     type(immersed_boundary_t) :: ibm
@@ -79,33 +95,23 @@ module immersed_scene
 
 contains
 
-  !> Place the bodies at t = solver%time and classify the nodes (collective).
-  !> load_method ('momentum' default, or 'surface') picks the loads written as force and torque;
-  !> surface_level the face sum's icosphere level (-1: no face sum, its columns zero; default 2, 320
-  !> faces, with load_method = 'surface', else -1: the face sum costs about 2 us per face per step,
-  !> 8 trilinear evaluations of the probes; a level with 'momentum' computes both side by side).
-  !> predictor_config: the hypre solve of the Crank-Nicolson predictor (default
-  !> default_predictor_config(1e-8, 200)); unused with explicit diffusion.
-  subroutine immersed_scene_create(scene, solver, motion, settings, driving_force, load_method, surface_level, &
-                                   predictor_config)
+  !> Place the bodies at t = solver%time and classify the nodes (collective), with the settings,
+  !> the drive, the loads and the predictor's solve of options (immersed_scene_options_t).
+  subroutine immersed_scene_create(scene, solver, motion, options)
     type(immersed_scene_t), intent(inout) :: scene
     type(fluid_solver_t), intent(inout) :: solver
     type(prescribed_motion_t), intent(in) :: motion(:)
-    type(ibm_settings_t), intent(in) :: settings
-    real(wp), intent(in) :: driving_force(3)
-    character(len=*), intent(in), optional :: load_method
-    integer, intent(in), optional :: surface_level
-    type(linear_solver_config_t), intent(in), optional :: predictor_config
+    type(immersed_scene_options_t), intent(in) :: options
     integer :: n
     scene%motion = motion
-    scene%ibm%settings = settings
-    scene%driving_force = driving_force
+    scene%ibm%settings = options%settings
+    scene%driving_force = options%driving_force
     call allocate_field(solver%grid, scene%force_u)
     call allocate_field(solver%grid, scene%force_v)
     call allocate_field(solver%grid, scene%force_w)
-    scene%force_u = driving_force(1) / solver%density
-    scene%force_v = driving_force(2) / solver%density
-    scene%force_w = driving_force(3) / solver%density
+    scene%force_u = options%driving_force(1) / solver%density
+    scene%force_v = options%driving_force(2) / solver%density
+    scene%force_w = options%driving_force(3) / solver%density
     scene%moving = .false.
     do n = 1, size(motion)
       scene%moving = scene%moving .or. any(motion(n)%velocity /= 0.0_wp) .or. &
@@ -115,14 +121,10 @@ contains
     allocate(scene%force(3, size(motion)), scene%torque(3, size(motion)))
     scene%force = 0
     scene%torque = 0
-    scene%load_method = 'momentum'
-    if (present(load_method)) scene%load_method = load_method
+    scene%load_method = options%load_method
     if (scene%load_method /= 'momentum' .and. scene%load_method /= 'surface') &
       call fatal('immersed scene: load_method '''//trim(scene%load_method)//'''; allowed: momentum, surface')
-    ! The face sum costs about 2 us per face per step: computed only when asked for (a scene
-    ! computes only what it switches on).
-    if (scene%load_method /= 'surface') scene%surface%mesh_level = -1
-    if (present(surface_level)) scene%surface%mesh_level = surface_level
+    scene%surface%mesh_level = options%surface_level
     if (scene%surface%mesh_level >= 0) then
       call surface_loads_create(scene%surface, motion(:)%shape)
     else if (scene%load_method == 'surface') then
@@ -132,11 +134,7 @@ contains
     scene%surface_force = scene%force; scene%surface_torque = scene%force
     call place_bodies(scene, solver, solver%time, classify=.true.)
     if (solver%crank_nicolson) then
-      if (present(predictor_config)) then
-        call immersed_predictor_create(scene%predictor, solver%grid, predictor_config)
-      else
-        call immersed_predictor_create(scene%predictor, solver%grid, default_predictor_config(1.0e-8_wp, 200))
-      end if
+      call immersed_predictor_create(scene%predictor, solver%grid, options%predictor_config)
     end if
     scene%timer = timer_register('immersed boundary')
     scene%timer_classify = timer_register('  IB classification')
@@ -144,29 +142,51 @@ contains
     scene%timer_loads = timer_register('  IB loads')
   end subroutine immersed_scene_create
 
-  !> One fluid step of length dt with the immersed bodies (collective). fluid_force_*: a body force
-  !> on the fluid (m/s^2, the Eswaran-Pope f^n on the faces), added to the uniform drive on the fluid
+  !> One fluid step of length dt with the bodies of the prescribed motion at t^{n+1} (reclassified
+  !> when they move; collective). fluid_force_*: a body force on the fluid (m/s^2, the Eswaran-Pope
+  !> f^n on the faces; absent: none, as in fluid_predict), added to the uniform drive on the fluid
   !> nodes of the new placement only: the imposition replaces the bodies' nodes, so the force there
   !> would only add rho f over the body's nodes to its load (the drive, a mean pressure gradient,
   !> does act on the body and stays everywhere).
-  !> bodies, velocity, angular_velocity: the bodies at t^{n+1} as the caller places them (free
-  !> particles, module resolved_hydrodynamics), instead of the prescribed motion; reclassified.
-  subroutine immersed_step(scene, solver, dt, fluid_force_u, fluid_force_v, fluid_force_w, bodies, velocity, &
-                           angular_velocity)
+  subroutine immersed_step(scene, solver, dt, fluid_force_u, fluid_force_v, fluid_force_w)
     type(immersed_scene_t), intent(inout), target :: scene
     type(fluid_solver_t), intent(inout) :: solver
     real(wp), intent(in) :: dt
     real(wp), intent(in), optional :: fluid_force_u(0:, 0:, 0:), fluid_force_v(0:, 0:, 0:), fluid_force_w(0:, 0:, 0:)
-    type(immersed_body_t), intent(in), optional :: bodies(:)
-    real(wp), intent(in), optional :: velocity(:, :), angular_velocity(:, :)
     call timer_tic(scene%timer)
     call timer_tic(scene%timer_classify)
-    if (present(bodies)) then
-      call ibm_set_bodies(scene%ibm, solver%grid, bodies, velocity, angular_velocity, classify=.true.)
-    else
-      call place_bodies(scene, solver, solver%time + dt, classify=scene%moving)
-    end if
+    call place_bodies(scene, solver, solver%time + dt, classify=scene%moving)
     call timer_toc(scene%timer_classify)
+    call staged_step(scene, solver, dt, scene%moving, fluid_force_u, fluid_force_v, fluid_force_w)
+  end subroutine immersed_step
+
+  !> immersed_step with the bodies at t^{n+1} as the caller places them (free particles, module
+  !> resolved_hydrodynamics) instead of the prescribed motion, always reclassified: bodies(n) with
+  !> velocity(:, n) (m/s) and angular_velocity(:, n) (rad/s, lab frame).
+  subroutine immersed_step_placed(scene, solver, dt, bodies, velocity, angular_velocity, fluid_force_u, &
+                                  fluid_force_v, fluid_force_w)
+    type(immersed_scene_t), intent(inout), target :: scene
+    type(fluid_solver_t), intent(inout) :: solver
+    real(wp), intent(in) :: dt
+    type(immersed_body_t), intent(in) :: bodies(:)
+    real(wp), intent(in) :: velocity(:, :), angular_velocity(:, :)
+    real(wp), intent(in), optional :: fluid_force_u(0:, 0:, 0:), fluid_force_v(0:, 0:, 0:), fluid_force_w(0:, 0:, 0:)
+    call timer_tic(scene%timer)
+    call timer_tic(scene%timer_classify)
+    call ibm_set_bodies(scene%ibm, solver%grid, bodies, velocity, angular_velocity, classify=.true.)
+    call timer_toc(scene%timer_classify)
+    call staged_step(scene, solver, dt, .true., fluid_force_u, fluid_force_v, fluid_force_w)
+  end subroutine immersed_step_placed
+
+  !> The step after the placement (the scene timer running): the forces on the new placement,
+  !> predict -> impose (or the predictor with the body rows) -> project -> re-impose -> loads ->
+  !> pressure of the sealed cells -> finish. reclassified: the nodes' status may have changed.
+  subroutine staged_step(scene, solver, dt, reclassified, fluid_force_u, fluid_force_v, fluid_force_w)
+    type(immersed_scene_t), intent(inout), target :: scene
+    type(fluid_solver_t), intent(inout) :: solver
+    real(wp), intent(in) :: dt
+    logical, intent(in) :: reclassified
+    real(wp), intent(in), optional :: fluid_force_u(0:, 0:, 0:), fluid_force_v(0:, 0:, 0:), fluid_force_w(0:, 0:, 0:)
     if (present(fluid_force_u)) then
       associate (drive => scene%driving_force / solver%density, nodes => scene%ibm%geometry%component)
         scene%force_u = drive(1) + merge(fluid_force_u, 0.0_wp, nodes(1)%status == node_fluid)
@@ -178,7 +198,7 @@ contains
     call timer_toc(scene%timer)
     if (solver%crank_nicolson) then
       ! The body rows are part of the predictor's system (the predictor's time counts as the fluid's).
-      if (scene%moving .or. present(bodies)) call immersed_predictor_reclassified(scene%predictor)
+      if (reclassified) call immersed_predictor_reclassified(scene%predictor)
       scene%predictor%ibm => scene%ibm
       if (scene%guess_from_velocity) call immersed_predictor_first_guess(scene%predictor, solver%grid, solver%u, &
                                                                          solver%v, solver%w)
@@ -221,7 +241,7 @@ contains
     if (scene%extend_pressure) call ibm_extend_pressure(scene%ibm, solver%grid, solver%pressure)
     call timer_toc(scene%timer)
     call fluid_finish_step(solver)
-  end subroutine immersed_step
+  end subroutine staged_step
 
   subroutine place_bodies(scene, solver, time, classify)
     type(immersed_scene_t), intent(inout) :: scene

@@ -14,13 +14,12 @@ module fluid_restart
   use hdf5_files, only: h5_file_t, h5_open, h5_close, h5_exists
   use hdf5_datasets, only: h5_read_scalar, h5_write_slab, h5_read_slab, h5_write_array, h5_read_array
   use checkpoint_files, only: checkpoint_t
-  use field_output, only: field_snapshot_t, field_snapshot_begin, field_snapshot_add, field_snapshot_end, &
+  use field_output, only: field_snapshot_t, field_snapshot_begin, field_snapshot_add, &
                           at_cell_centre, at_x_face, at_y_face, at_z_face
-  use body_surface_output, only: body_pose_t, field_snapshot_add_bodies
   use fluid_solver, only: fluid_solver_t, fluid_exchange_velocity
   implicit none
   private
-  public :: write_fluid_checkpoint, read_fluid_checkpoint, write_fluid_state, write_fluid_snapshot, read_initial_field
+  public :: write_fluid_checkpoint, read_fluid_checkpoint, write_fluid_state, begin_fluid_snapshot, read_initial_field
 
   !> Relative difference below which a stored box length is the deck's (the same decimal in a deck
   !> gives the same double; this only forgives a last-digit rewrite of the same length).
@@ -169,21 +168,18 @@ contains
     field(1:solver%grid%nx, 1:solver%grid%ny, 1:solver%grid%nz_local) = interior
   end subroutine read_interior
 
-  !> fields_<step>.h5 with u, v, w (on their faces) and pressure (cell centres), and fields.xdmf;
-  !> with bodies, their surfaces at those poses too (body_surface_output).
-  subroutine write_fluid_snapshot(solver, bodies)
+  !> Open the snapshot fields_<step>.h5 with u, v, w (on their faces) and pressure (cell centres);
+  !> the caller may add more (the bodies' surfaces: body_surface_output) before field_snapshot_end
+  !> writes it and fields.xdmf.
+  subroutine begin_fluid_snapshot(snapshot, solver)
+    type(field_snapshot_t), intent(out) :: snapshot
     type(fluid_solver_t), intent(in) :: solver
-    type(body_pose_t), intent(in), optional :: bodies(:)
-    type(field_snapshot_t) :: snapshot
     call field_snapshot_begin(snapshot, solver%step, solver%time, [solver%grid%nx, solver%grid%ny, solver%grid%nz], &
                               [solver%grid%lx, solver%grid%ly, solver%grid%lz])
     call add('u', solver%u, at_x_face)
     call add('v', solver%v, at_y_face)
     call add('w', solver%w, at_z_face)
     call add('pressure', solver%pressure, at_cell_centre)
-    if (present(bodies)) &
-      call field_snapshot_add_bodies(snapshot, bodies, [solver%grid%lx, solver%grid%ly, solver%grid%lz])
-    call field_snapshot_end(snapshot)
 
   contains
 
@@ -194,5 +190,5 @@ contains
       interior = field(1:solver%grid%nx, 1:solver%grid%ny, 1:solver%grid%nz_local)
       call field_snapshot_add(snapshot, name, interior, solver%grid%z_offset, location)
     end subroutine add
-  end subroutine write_fluid_snapshot
+  end subroutine begin_fluid_snapshot
 end module fluid_restart

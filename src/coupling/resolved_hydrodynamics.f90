@@ -4,7 +4,7 @@
 !>
 !> Fluid step t^n -> t^{n+1}: the bodies are placed where the particle state predicts them at
 !> t^{n+1} (centre x^n + U^n dt, orientation turned by Omega^n dt) and move with the state's U^n,
-!> Omega^n, the latest known velocities; the immersed scene's staged step (immersed_step) imposes
+!> Omega^n, the latest known velocities; the immersed scene's staged step (immersed_step_placed) imposes
 !> them and returns the momentum-balance force and torque F^n, T^n. The placement error is
 !> O(a dt^2) (docs/theory.md, "Free particles"); the one-step lag of the velocities is what the
 !> added-mass stabilisation below is about. The loads stay frozen over the fluid step's
@@ -91,8 +91,8 @@ module resolved_hydrodynamics
   use immersed_placement, only: ibm_set_bodies
   use immersed_imposition, only: ibm_impose
   use immersed_diagnostics, only: ibm_fallback_rows
-  use immersed_scene, only: immersed_scene_t, prescribed_motion_t, immersed_scene_create, immersed_step, loads_open, &
-                            loads_write, loads_close
+  use immersed_scene, only: immersed_scene_t, immersed_scene_options_t, prescribed_motion_t, immersed_scene_create, &
+                            immersed_step_placed, loads_open, loads_write, loads_close
   use particle_hydrodynamics, only: particle_hydrodynamics_t
   use rigid_body, only: angular_velocity_lab, added_inertia_t
   use hypre_solver, only: linear_solver_config_t
@@ -185,6 +185,7 @@ contains
     type(particle_system_t), intent(in) :: system
     type(resolved_hydrodynamics_options_t), intent(in) :: options
     type(prescribed_motion_t), allocatable :: motion(:)
+    type(immersed_scene_options_t) :: scene_options
     real(wp) :: k(2), fluid_mass, ratio_translation, ratio_rotation
     type(stokes_resistance_t) :: resistance
     integer :: i
@@ -232,9 +233,12 @@ contains
       ratio_translation = max(ratio_translation, maxval(provider%added_mass(:, i)) / system%bodies(i)%mass)
       ratio_rotation = max(ratio_rotation, maxval(provider%added_inertia(:, i) / system%bodies(i)%inertia_body))
     end do
-    call immersed_scene_create(provider%scene, solver, motion, options%settings, &
-                               -sum(provider%weight, dim=2) / (provider%box(1) * provider%box(2) * provider%box(3)), &
-                               options%load_method, options%surface_level, options%predictor_config)
+    scene_options%settings = options%settings
+    scene_options%driving_force = -sum(provider%weight, dim=2) / (provider%box(1) * provider%box(2) * provider%box(3))
+    scene_options%load_method = options%load_method
+    scene_options%surface_level = options%surface_level
+    scene_options%predictor_config = options%predictor_config
+    call immersed_scene_create(provider%scene, solver, motion, scene_options)
     allocate(provider%force(3, system%n), provider%torque(3, system%n))
     provider%force = 0
     provider%torque = 0
@@ -341,12 +345,11 @@ contains
     call current_bodies(self, system, dt, bodies)
     if (forcing%active) then
       call forcing_driver_evaluate(forcing)
-      call immersed_step(self%scene, solver, dt, forcing%fx, forcing%fy, forcing%fz, bodies=bodies, &
-                         velocity=self%imposed_velocity, angular_velocity=self%imposed_angular_velocity)
+      call immersed_step_placed(self%scene, solver, dt, bodies, self%imposed_velocity, self%imposed_angular_velocity, &
+                                forcing%fx, forcing%fy, forcing%fz)
       call forcing_driver_advance(forcing, dt)
     else
-      call immersed_step(self%scene, solver, dt, bodies=bodies, velocity=self%imposed_velocity, &
-                         angular_velocity=self%imposed_angular_velocity)
+      call immersed_step_placed(self%scene, solver, dt, bodies, self%imposed_velocity, self%imposed_angular_velocity)
     end if
     self%force = self%scene%force
     self%torque = self%scene%torque
