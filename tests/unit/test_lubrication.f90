@@ -1,4 +1,4 @@
-! checks: 38
+! checks: 43
 !> Unit tests of the sub-grid lubrication (src/particles/lubrication.f90; docs/theory.md, "Sub-grid
 !> lubrication"): the resistance of two spheres against the near-contact expansion written out by
 !> hand and against Brenner's exact series, the curvature-based reduced radius of a sphere facing a
@@ -22,7 +22,7 @@ program test_lubrication
   use test_framework, only: test_start, test_finish, check, check_close, check_below
   implicit none
   real(wp), parameter :: mu = 1.0e-3_wp, density = 2710.0_wp, identity(4) = [1.0_wp, 0.0_wp, 0.0_wp, 0.0_wp]
-  type(lubrication_model_t) :: model
+  type(lubrication_model_t) :: model, wide
   type(spheroid_t) :: sphere1, sphere2, needle
   type(rigid_body_t) :: body1, body2
   type(closest_points_t) :: contact
@@ -101,6 +101,21 @@ program test_lubrication
                    lubrication_subgrid_resistance(model, geometry, 1.0e-9_wp), 1.0e-12_wp, 'saturated_below_roughness')
   call check(lubrication_subgrid_resistance(model, geometry, 1.0e-11_wp) > &
              2.0_wp * lubrication_subgrid_resistance(model, geometry, 1.0e-8_wp), 'grows_toward_roughness')
+
+  ! A particle-scale hand-over (the 'stokes' and point rungs: one radius) between two needle tips
+  ! (radius of curvature b^2/a = 5.85 um): the expansion is negative at h_out = 50 um (xi = 8.5) and
+  ! from about xi = 1.7 (h = 10 um) on, so R_sub = max(0, R(h)): the full expansion near contact,
+  ! nothing and no pull where it is negative (R(h) - R(h_out) would add a spurious positive offset).
+  call place(needle, [0.0_wp, 0.0_wp, 0.0_wp], identity, needle, [2.0_wp * needle%a + gap, 0.0_wp, 0.0_wp], identity)
+  geometry = lubrication_geometry(needle, body1, needle, body2, contact)
+  call check_close(geometry%reduced_radius, 0.5_wp * needle%b**2 / needle%a, 1.0e-9_wp, 'needle_tips_reduced_radius')
+  wide = lubrication_model_t(dynamic_viscosity=mu, outer_gap=50.0e-6_wp, roughness=1.0e-9_wp)
+  call check(lubrication_resistance(wide, geometry, 50.0e-6_wp) < 0.0_wp .and. &
+             lubrication_resistance(wide, geometry, 15.0e-6_wp) < 0.0_wp, 'needle_tips_expansion_negative_far_out')
+  call check(lubrication_subgrid_resistance(wide, geometry, 15.0e-6_wp) == 0.0_wp, &
+             'particle_scale_handover_nothing_where_expansion_negative')
+  call check_close(lubrication_subgrid_resistance(wide, geometry, 1.0e-7_wp), lubrication_resistance(wide, geometry, 1.0e-7_wp), &
+                   1.0e-12_wp, 'particle_scale_handover_full_expansion_near_contact')
 
   ! Above h_out: lubricate does nothing.
   call place(sphere1, [0.0_wp, 0.0_wp, 0.0_wp], identity, sphere2, [a1 + a2 + 25.0e-6_wp, 0.0_wp, 0.0_wp], identity)
