@@ -4,7 +4,9 @@
 !> hand and against Brenner's exact series, the curvature-based reduced radius of a sphere facing a
 !> needle (equator and tip), saturation below the roughness, nothing above the hand-over gap,
 !> Newton's third law and momentum conservation, the torque of the off-centre application point,
-!> the implicit update at a stiff gap, and the particle system's step with lubrication switched on.
+!> the implicit update at a stiff gap, a particle-scale hand-over where the expansion is negative
+!> (two needle tips), the particle system's step with lubrication switched on, and every pair of a
+!> periodic three-body system lubricated.
 program test_lubrication
   use agglo_kinds, only: wp
   use physical_constants, only: pi
