@@ -6,7 +6,7 @@
 !> two-sphere resistance (Brenner 1961; Jeffrey & Onishi 1984 near contact):
 !>  - the time to 1e-3 r within 30% (measured -24%: isolated drags plus the near-contact squeeze
 !>    miss the far-field interaction, lambda - 1 = 0.60 at 2 radii, 1.04 at 1 radius; with a
-!>    hand-over of half a cell of a D/dx = 8 grid, 0.125 r, the time is 43% short and this fails);
+!>    hand-over of half a cell of a D/dx = 8 grid, 0.125 r, the time is 44% short and this fails);
 !>  - the time at every gap from 2 r to 1e-3 r within 50% (largest |t(h)/t_ref(h) - 1|, measured 44%,
 !>    early in the approach, where the exact lambda is 1.6 and the isolated drags give 1);
 !>  - the time from 1e-2 r to 10 nm within 3% (near contact the model is the exact expansion less
