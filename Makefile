@@ -215,7 +215,7 @@ validate: deps ## run the immersed-boundary validation ladder (the table in docs
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_free_squeeze pressure=non_incremental 8 32 0.1 0 0.5 0.75 1
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_free_cn
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_push_pair stokes
-	for r in '8 24' '8 48' '12 36'; do $(MPIRUN) -np 1 $(BUILD)/bench/bench_push_pair resolved $$r 0.1; done
+	for r in '8 24 0.1' '8 48 0.1' '12 36 0.1' '8 48 0.03'; do $(MPIRUN) -np 1 $(BUILD)/bench/bench_push_pair resolved $$r; done
 	AGGLO=$(abspath $(BUILD))/agglo EXTREMES=long bash tests/mpi/test_resolved_extremes.sh
 
 clean: ## remove the build directory
