@@ -194,7 +194,8 @@ bench: deps ## run the benchmarks (results for docs/performance.md)
 validate: deps ## run the immersed-boundary validation ladder (the table in docs/validation.md)
 	@$(MAKE) --no-print-directory build $(BUILD)/bench/bench_immersed_ladder $(BUILD)/bench/bench_immersed_surface \
 	  $(BUILD)/bench/bench_immersed_moving $(BUILD)/bench/bench_immersed_cn $(BUILD)/bench/bench_immersed_squeeze \
-	  $(BUILD)/bench/bench_free_particles $(BUILD)/bench/bench_free_squeeze $(BUILD)/bench/bench_free_cn
+	  $(BUILD)/bench/bench_free_particles $(BUILD)/bench/bench_free_squeeze $(BUILD)/bench/bench_free_cn \
+	  $(BUILD)/bench/bench_push_pair
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_immersed_ladder
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_immersed_surface
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_immersed_moving
@@ -213,6 +214,8 @@ validate: deps ## run the immersed-boundary validation ladder (the table in docs
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_free_squeeze
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_free_squeeze pressure=non_incremental 8 32 0.1 0 0.5 0.75 1
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_free_cn
+	$(MPIRUN) -np 1 $(BUILD)/bench/bench_push_pair stokes
+	for r in '8 24 0.1' '8 48 0.1' '12 36 0.1' '8 48 0.03'; do $(MPIRUN) -np 1 $(BUILD)/bench/bench_push_pair resolved $$r; done
 	AGGLO=$(abspath $(BUILD))/agglo EXTREMES=long bash tests/mpi/test_resolved_extremes.sh
 	@$(MAKE) --no-print-directory validate-decks
 

@@ -36,22 +36,29 @@ module config_collision
 
 contains
 
-  !> The hand-over gap (cells) the squeeze calibration measured for the scene (docs/studies/validation.md,
-  !> "Lubrication"): where the resolved squeeze force of the immersed boundary stops following
-  !> Brenner's (1961) exact force of two spheres. With resolved particles and the pressure-free
-  !> projection (&fluid pressure_scheme = 'non_incremental', the decks') the resolved force falls
-  !> behind the exact one from about a cell (-10% at 0.75 cell, -25% at 0.5 cell, D/dx = 8, nu dt/dx^2
-  !> = 0.079): 0.75 cell, with which the total stays within +4% below it. With the incremental
-  !> pressure it follows to half a cell (and overshoots by about 20% between 1 and 0.5 cell, which a
-  !> larger hand-over would count twice): 0.5 cell. Elsewhere (the 'stokes' scene, point particles)
-  !> the hand-over is only the model's cut-off: 0.5 cell.
-  pure real(wp) function default_lubrication_handover(fluid, particle_coupling, pressure_scheme) result(cells)
+  !> The hand-over gap (cells) of the scene's rung (docs/theory.md, "Sub-grid lubrication").
+  !> Resolved particles: where the resolved squeeze force of the immersed boundary stops following
+  !> Brenner's (1961) exact force of two spheres (docs/studies/validation.md, "Lubrication"). With
+  !> the pressure-free projection (&fluid pressure_scheme = 'non_incremental', the decks') the
+  !> resolved force falls behind the exact one from about a cell (-10% at 0.75 cell, -25% at 0.5
+  !> cell, D/dx = 8, nu dt/dx^2 = 0.079): 0.75 cell, with which the total stays within +4% below it.
+  !> With the incremental pressure it follows to half a cell (and overshoots by about 20% between 1
+  !> and 0.5 cell, which a larger hand-over would count twice): 0.5 cell. The 'stokes' scene and
+  !> point particles resolve no squeeze flow at all (isolated-body resistances): the model acts from
+  !> one particle radius (&pair radius) on, radius / spacing cells, which keeps the near-contact
+  !> mobility of two spheres within 2% of the exact one below a hundredth of a radius
+  !> (docs/studies/validation.md, "Free approach under a constant force").
+  pure real(wp) function default_lubrication_handover(fluid, particle_coupling, pressure_scheme, radius, spacing) &
+      result(cells)
     character(len=*), intent(in) :: fluid               !< &scene fluid
     character(len=*), intent(in) :: particle_coupling   !< &scene particle_coupling
     character(len=*), intent(in) :: pressure_scheme     !< &fluid pressure_scheme
+    real(wp), intent(in) :: radius                      !< m, &pair radius
+    real(wp), intent(in) :: spacing                     !< m, the smallest &grid cell edge (> 0)
     cells = 0.5_wp
     if (fluid == 'resolved' .and. particle_coupling == 'resolved' .and. pressure_scheme == 'non_incremental') &
       cells = 0.75_wp
+    if (fluid == 'stokes' .or. (fluid == 'resolved' .and. particle_coupling == 'point')) cells = radius / spacing
   end function default_lubrication_handover
 
   subroutine to_namelist(cfg)

@@ -7,7 +7,7 @@ module config_reader
   use deck_file, only: deck_t, deck_load, deck_check_groups, deck_group_close, lower
   use error_handling, only: fatal
   use config_run, only: read_run_group, check_run_group
-  use config_grid, only: read_grid_group, check_grid_group
+  use config_grid, only: read_grid_group, check_grid_group, smallest_spacing
   use config_fluid, only: read_fluid_group, check_fluid_group
   use config_scene, only: read_scene_group, check_scene_group
   use config_output, only: read_output_group, check_output_group
@@ -57,11 +57,20 @@ contains
     type(deck_t), intent(in) :: deck
     integer, intent(in) :: nranks
     type(agglo_config_t), intent(out) :: cfg
+    real(wp) :: spacing
     call deck_check_groups(deck, deck_group_names)
     call read_groups(deck, cfg)
-    ! &collision lubrication_handover = 0 (its default): the calibrated gap of the scene's pressure scheme.
-    if (cfg%collision%lubrication_handover == 0.0_wp) cfg%collision%lubrication_handover = &
-      default_lubrication_handover(cfg%scene%fluid, cfg%scene%particle_coupling, cfg%fluid%pressure_scheme)
+    ! &collision lubrication_handover = 0 (its default): the gap of the scene's rung (calibrated with
+    ! resolved particles, one &pair radius without a resolved squeeze flow). A grid without cells
+    ! gets the resolved value here and its own error from check_grid_group.
+    if (cfg%collision%lubrication_handover == 0.0_wp) then
+      spacing = 0.0_wp
+      if (min(cfg%grid%nx, cfg%grid%ny, cfg%grid%nz) > 0) spacing = smallest_spacing(cfg%grid)
+      if (.not. (spacing > 0.0_wp)) spacing = huge(1.0_wp)
+      cfg%collision%lubrication_handover = default_lubrication_handover(cfg%scene%fluid, cfg%scene%particle_coupling, &
+                                                                        cfg%fluid%pressure_scheme, cfg%pair%radius, spacing)
+      if (.not. (cfg%collision%lubrication_handover > 0.0_wp)) cfg%collision%lubrication_handover = 0.5_wp
+    end if
     call check_every_value(cfg)
     call check_run_group(cfg%run)
     call check_scene_group(cfg%scene)

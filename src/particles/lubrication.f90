@@ -21,8 +21,11 @@
 !>
 !> Hand-over (Costa, Boersma, Westerweel & Breugem 2015, Phys. Rev. E 92, 053012: lambda(eps) -
 !> lambda(eps_out)): the grid resolves the squeeze flow down to the gap h_out, so only the unresolved part is added,
-!>   R_sub(h) = R(max(h, h_in)) - R(h_out)  for h < h_out,   0 for h >= h_out,
-!> saturated below the roughness gap h_in (Costa et al.: the force stays finite at contact).
+!>   R_sub(h) = max(0, R(max(h, h_in)) - max(0, R(h_out)))  for h < h_out,   0 for h >= h_out,
+!> saturated below the roughness gap h_in (Costa et al.: the force stays finite at contact). The
+!> expansion R turns negative where the gap reaches the radii of curvature (xi > 1.71 for equal
+!> spheres), which a particle-scale h_out (no resolved squeeze flow: the 'stokes' and point rungs)
+!> or a sharp tip can reach: there the model subtracts nothing and never pulls.
 !>
 !> Time integration: R_sub can be far stiffer than the particle step (R dt / m > 2 at nanometre gaps),
 !> so the pair's normal velocity is damped implicitly over dt: the impulse J = j n on body 2 (-J on
@@ -157,15 +160,17 @@ contains
                              + geometry%radius1 * (g2 * log_inverse + g3 * xi * log_inverse))
   end function lubrication_resistance
 
-  !> R_sub(h) = R(max(h, h_in)) - R(h_out) below h_out, else 0 (module header).
+  !> R_sub(h) = max(0, R(max(h, h_in)) - max(0, R(h_out))) below h_out, else 0 (module header).
   pure real(wp) function lubrication_subgrid_resistance(model, geometry, gap)
     type(lubrication_model_t), intent(in) :: model
     type(lubrication_geometry_t), intent(in) :: geometry
     real(wp), intent(in) :: gap
     lubrication_subgrid_resistance = 0.0_wp
     if (gap >= model%outer_gap) return
-    lubrication_subgrid_resistance = lubrication_resistance(model, geometry, max(gap, model%roughness)) &
-                                     - lubrication_resistance(model, geometry, model%outer_gap)
+    ! The expansion turns negative at xi of about 1.7 (equal spheres): a particle-scale h_out (the
+    ! 'stokes' and point rungs) or a sharp tip may lie beyond, where it subtracts nothing.
+    lubrication_subgrid_resistance = max(0.0_wp, lubrication_resistance(model, geometry, max(gap, model%roughness)) &
+                                     - max(0.0_wp, lubrication_resistance(model, geometry, model%outer_gap)))
   end function lubrication_subgrid_resistance
 
   !> Apply the lubrication impulse of one step dt to both bodies (implicit in v_n; module header).

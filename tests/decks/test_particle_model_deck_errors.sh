@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# checks: 27
+# checks: 29
 # Bad &dlvo / &collision / &pair integrator input is rejected before anything runs, with a message
 # naming the group, the variable, the value and the allowed range (docs/decks.md). Each case runs
 # $AGGLO on a small fluid-free pair deck and greps the error; the defaults must pass the checks.
@@ -70,6 +70,16 @@ expect_deck_file_error handover_default_non_incremental 1 "$resolved_needle" \
 extra_args+=(--set "fluid.pressure_scheme='incremental'")
 expect_deck_file_error handover_default_incremental 1 "$resolved_needle" \
   "lubrication_handover * &grid spacing = 6.66667E-06 m"
+extra_args=()
+# Without a resolved squeeze flow (the 'stokes' scene, point particles) the default hand-over is one
+# &pair radius (50 um), whatever the grid (config_collision, default_lubrication_handover).
+expect_deck_error handover_default_stokes_one_radius 1 "$stokes
+&collision lubrication = .true., lubrication_roughness = 6.0e-5 /" \
+  "lubrication_handover * &grid spacing = 5.00000E-05 m"
+extra_args=(--set collision.lubrication=.true. --set collision.lubrication_roughness=6e-5
+            --set "scene.particle_coupling='point'")
+expect_deck_file_error handover_default_point_one_radius 1 "$resolved_needle" \
+  "lubrication_handover * &grid spacing = 5.00000E-05 m"
 extra_args=()
 
 # The defaults (Table 1) and every option pass the checks (the run may stop later for other reasons,

@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# checks: 5
+# checks: 6
 # The pair in the resolved fluid with point-particle coupling (&scene particle_coupling = 'point'),
 # with $AGGLO on small decks:
-#  - fluid at rest: the point particles feel exactly the 'stokes' scene's drag (u_f = 0, Du/Dt = 0),
+#  - fluid at rest, with and without the sub-grid lubrication: the point particles feel exactly the 'stokes' scene's drag (u_f = 0, Du/Dt = 0),
 #    so the quiescent run reproduces the 'stokes' pair run: same outcome, the first collision's time
 #    and normal velocities to 1e-9 (the clocks differ in round-off only: dt / particle_substeps vs
 #    dt; the later collision counts differ as the runs end on different steps, a fluid-step boundary);
@@ -69,6 +69,32 @@ if mpirun -np 1 "$AGGLO" stokes.nml > stokes.out 2>&1 && mpirun -np 1 "$AGGLO" p
   fi
 else
   echo "FAIL point_pair_runs/quiescent_point_equals_stokes: a run failed: $(tail -n 2 stokes.out point.out | head -c 400)"
+fi
+
+# --- the same with the sub-grid lubrication: both rungs resolve no squeeze flow, so both take the
+# hand-over of one &pair radius (config_collision, default_lubrication_handover), whatever their grids
+# (the 'stokes' deck has none, the point deck 8 cells), and the squeeze film stops the pair that
+# collides without it: the same final gap to 1e-9, short of contact.
+lubricated='\&collision restitution = 0.4, detection_floor = 1.0e-9, lubrication = .true. /'   # \& : sed
+sed "s|^&collision .*|$lubricated|; s|name = 'stokes'|name = 'stokes_lub'|" stokes.nml > stokes_lub.nml
+sed "s|^&collision .*|$lubricated|; s|name = 'point'|name = 'point_lub'|" point.nml > point_lub.nml
+if mpirun -np 1 "$AGGLO" stokes_lub.nml > stokes_lub.out 2>&1 && mpirun -np 1 "$AGGLO" point_lub.nml > point_lub.out 2>&1; then
+  result=$(python3 - <<'PY'
+import json
+a, b = (json.load(open(f"output/{n}/summary.json")) for n in ("point_lub", "stokes_lub"))
+ok = (a["outcome"] == b["outcome"] == "no_contact" and abs(a["final_gap"] - b["final_gap"]) <= 1e-9 * b["final_gap"]
+      and b["final_gap"] > 0.5e-6)
+print(("ok " if ok else "") + f"outcomes {a['outcome']} / {b['outcome']}, final gaps {a['final_gap']!r} / {b['final_gap']!r} m")
+PY
+)
+  handovers=$(grep -h -o 'below h_out = *[0-9.E+-]* m' stokes_lub.out point_lub.out | tr -s ' ' | sort -u)
+  if [ "${result#ok }" != "$result" ] && [ "$handovers" = "below h_out = 5.0000E-05 m" ]; then
+    echo "PASS point_pair_runs/quiescent_point_equals_stokes_with_lubrication  (${result#ok }; $handovers)"
+  else
+    echo "FAIL point_pair_runs/quiescent_point_equals_stokes_with_lubrication: $result; hand-overs: $handovers"
+  fi
+else
+  echo "FAIL point_pair_runs/quiescent_point_equals_stokes_with_lubrication: a run failed: $(tail -n 2 stokes_lub.out point_lub.out | head -c 400)"
 fi
 
 # --- forced random field: 1 vs 2 ranks, restart ------------------------------------------------------

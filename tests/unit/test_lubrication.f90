@@ -1,10 +1,12 @@
-! checks: 38
+! checks: 47
 !> Unit tests of the sub-grid lubrication (src/particles/lubrication.f90; docs/theory.md, "Sub-grid
 !> lubrication"): the resistance of two spheres against the near-contact expansion written out by
 !> hand and against Brenner's exact series, the curvature-based reduced radius of a sphere facing a
 !> needle (equator and tip), saturation below the roughness, nothing above the hand-over gap,
 !> Newton's third law and momentum conservation, the torque of the off-centre application point,
-!> the implicit update at a stiff gap, and the particle system's step with lubrication switched on.
+!> the implicit update at a stiff gap, a particle-scale hand-over where the expansion is negative
+!> (two needle tips), the particle system's step with lubrication switched on, and every pair of a
+!> periodic three-body system lubricated.
 program test_lubrication
   use agglo_kinds, only: wp
   use physical_constants, only: pi
@@ -17,12 +19,12 @@ program test_lubrication
   use lubrication, only: lubrication_model_t, lubrication_geometry_t, lubrication_result_t, lubrication_geometry, &
                          lubrication_resistance, lubrication_subgrid_resistance, lubricate
   use particle_system, only: particle_models_t, particle_system_t, particle_system_create, particle_system_interact, &
-                             particle_system_step
+                             particle_system_step, particle_interaction_gap
   use squeeze_case, only: brenner_squeeze_coefficient
   use test_framework, only: test_start, test_finish, check, check_close, check_below
   implicit none
   real(wp), parameter :: mu = 1.0e-3_wp, density = 2710.0_wp, identity(4) = [1.0_wp, 0.0_wp, 0.0_wp, 0.0_wp]
-  type(lubrication_model_t) :: model
+  type(lubrication_model_t) :: model, wide
   type(spheroid_t) :: sphere1, sphere2, needle
   type(rigid_body_t) :: body1, body2
   type(closest_points_t) :: contact
@@ -102,6 +104,21 @@ program test_lubrication
   call check(lubrication_subgrid_resistance(model, geometry, 1.0e-11_wp) > &
              2.0_wp * lubrication_subgrid_resistance(model, geometry, 1.0e-8_wp), 'grows_toward_roughness')
 
+  ! A particle-scale hand-over (the 'stokes' and point rungs: one radius) between two needle tips
+  ! (radius of curvature b^2/a = 5.85 um): the expansion is negative at h_out = 50 um (xi = 8.5) and
+  ! from about xi = 1.7 (h = 10 um) on, so R_sub = max(0, R(h)): the full expansion near contact,
+  ! nothing and no pull where it is negative (R(h) - R(h_out) would add a spurious positive offset).
+  call place(needle, [0.0_wp, 0.0_wp, 0.0_wp], identity, needle, [2.0_wp * needle%a + gap, 0.0_wp, 0.0_wp], identity)
+  geometry = lubrication_geometry(needle, body1, needle, body2, contact)
+  call check_close(geometry%reduced_radius, 0.5_wp * needle%b**2 / needle%a, 1.0e-9_wp, 'needle_tips_reduced_radius')
+  wide = lubrication_model_t(dynamic_viscosity=mu, outer_gap=50.0e-6_wp, roughness=1.0e-9_wp)
+  call check(lubrication_resistance(wide, geometry, 50.0e-6_wp) < 0.0_wp .and. &
+             lubrication_resistance(wide, geometry, 15.0e-6_wp) < 0.0_wp, 'needle_tips_expansion_negative_far_out')
+  call check(lubrication_subgrid_resistance(wide, geometry, 15.0e-6_wp) == 0.0_wp, &
+             'particle_scale_handover_nothing_where_expansion_negative')
+  call check_close(lubrication_subgrid_resistance(wide, geometry, 1.0e-7_wp), lubrication_resistance(wide, geometry, 1.0e-7_wp), &
+                   1.0e-12_wp, 'particle_scale_handover_full_expansion_near_contact')
+
   ! Above h_out: lubricate does nothing.
   call place(sphere1, [0.0_wp, 0.0_wp, 0.0_wp], identity, sphere2, [a1 + a2 + 25.0e-6_wp, 0.0_wp, 0.0_wp], identity)
   body1%velocity = [1.0e-3_wp, 0.0_wp, 0.0_wp]
@@ -157,6 +174,7 @@ program test_lubrication
   call check(v_after >= 0.0_wp .and. v_after < 0.05_wp * v_before, 'stiff_gap_damped_not_reversed')
 
   call system_with_lubrication()
+  call ring_with_lubrication()
   call test_finish()
 
 contains
@@ -204,4 +222,34 @@ contains
     call check_close(system%bodies(1)%velocity(1), 1.0e-3_wp - expected_force * dt / sphere1%mass, 1.0e-2_wp * &
                      expected_force * dt / sphere1%mass / 1.0e-3_wp, 'system_lubrication_slows_body1')
   end subroutine system_with_lubrication
+
+  !> Every pair of a many-body system: three spheres in a line in a periodic box, 1 um apart, the
+  !> third pair across the box's wrap, the broad phase's gap that of a many-body scene
+  !> (particle_interaction_gap: the hand-over gap). Bodies 1 and 3 approach body 2 at 1 mm/s and
+  !> separate from each other across the wrap (the film resists both): all three pairs are
+  !> lubricated, at the same resistance, and the loads sum to zero.
+  subroutine ring_with_lubrication()
+    type(particle_system_t) :: system
+    type(particle_models_t) :: models
+    type(rigid_body_t) :: bodies(3)
+    real(wp) :: pitch, box(3)
+    integer :: n
+    pitch = 2.0_wp * a1 + 1.0e-6_wp
+    box = [3.0_wp * pitch, 4.0_wp * a1, 4.0_wp * a1]
+    do n = 1, 3
+      call rigid_body_of_spheroid(bodies(n), sphere1, [(n - 0.5_wp) * pitch, 2.0_wp * a1, 2.0_wp * a1], identity, &
+                                  [(2 - n) * 1.0e-3_wp, 0.0_wp, 0.0_wp])
+    end do
+    models%lubrication = .true.
+    models%lubrication_model = model
+    models%interaction_gap = particle_interaction_gap(models)
+    call particle_system_create(system, [sphere1, sphere1, sphere1], bodies, models, box_length=box)
+    call particle_system_interact(system, 2.0e-7_wp)
+    call check(size(system%pairs) == 3, 'ring_three_pair_records')
+    call check(all(system%pairs%lubrication%active), 'ring_every_pair_lubricated')
+    call check_close(minval(system%pairs%lubrication%resistance), maxval(system%pairs%lubrication%resistance), 1.0e-9_wp, &
+                     'ring_pairs_same_resistance')
+    call check_below(norm2(sum(system%lubrication_loads%force, dim=2)), 1.0e-12_wp * norm2(system%lubrication_loads%force), &
+                     'ring_loads_sum_to_zero')
+  end subroutine ring_with_lubrication
 end program test_lubrication

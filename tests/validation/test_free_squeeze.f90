@@ -39,7 +39,7 @@ program test_free_squeeze
                    'resolved_force_at_quarter_cell_misses_the_squeeze')
 
   case%lubrication = .true.
-  case%handover_cells = default_lubrication_handover('resolved', 'resolved', case%pressure_scheme)
+  case%handover_cells = default_lubrication_handover('resolved', 'resolved', case%pressure_scheme, 1.0_wp, 1.0_wp)
   call run_free_squeeze(case, lubricated)
   call check(lubricated%reached, 'lubricated_pair_closes_to_a_fifth_of_a_cell')
   call check_close(force_at(lubricated, lubricated%resolved + lubricated%lubrication, 0.25_wp), &

@@ -40,7 +40,7 @@ program test_immersed_squeeze
 
   case%pressure_scheme = 'non_incremental'
   case%viscous_number = 0.0786_wp
-  case%gap_cells = default_lubrication_handover('resolved', 'resolved', case%pressure_scheme)
+  case%gap_cells = default_lubrication_handover('resolved', 'resolved', case%pressure_scheme, 1.0_wp, 1.0_wp)
   call run_squeeze(case, result)
   print '(a,f5.2,a,es11.4,a,es11.4,a,f7.4,a,i0,a)', 'non-incremental at ', case%gap_cells, ' cell: F = ', &
       result%force, ' N, F_B = ', result%reference, ' N, F / F_B = ', result%force / result%reference, ' (', &
