@@ -94,6 +94,13 @@ def last_field(run):
     return h5py.File(snapshots[-1], 'r')
 
 
+def one_body_run(run):
+    """The resolved deck of a one-body run, its fluid density, dynamic viscosity and body radius."""
+    deck = read_namelist(Path(run) / 'run.nml')
+    rho = number(deck, 'FLUID', 'DENSITY')
+    return deck, rho, number(deck, 'FLUID', 'VISCOSITY') * rho, number(deck, 'BODIES', 'RADIUS')
+
+
 def row(case, reference, measured, error, tolerance, inside):
     print(f'| {case} | {reference} | {measured} | {error} | {tolerance} |', flush=True)
     return 0 if inside else 1
@@ -171,10 +178,7 @@ def stokes_oscillating_force(radius, omega, velocity, box_length, mu, rho):
 
 def oscillating(runs):
     run = runs[0]
-    deck = read_namelist(Path(run) / 'run.nml')
-    rho = number(deck, 'FLUID', 'DENSITY')
-    mu = number(deck, 'FLUID', 'VISCOSITY') * rho
-    radius = number(deck, 'BODIES', 'RADIUS')
+    deck, rho, mu, radius = one_body_run(run)
     amplitude = number(deck, 'BODIES', 'OSCILLATION_AMPLITUDE')
     frequency = number(deck, 'BODIES', 'OSCILLATION_FREQUENCY')
     length = number(deck, 'GRID', 'LENGTH_X')
@@ -206,10 +210,7 @@ def oscillating(runs):
 
 def settling(runs):
     run = runs[0]
-    deck = read_namelist(Path(run) / 'run.nml')
-    rho = number(deck, 'FLUID', 'DENSITY')
-    mu = number(deck, 'FLUID', 'VISCOSITY') * rho
-    radius = number(deck, 'BODIES', 'RADIUS')
+    deck, rho, mu, radius = one_body_run(run)
     density = number(deck, 'PAIR', 'DENSITY')
     gravity = np.array([number(deck, 'PAIR', 'GRAVITY', i) for i in range(3)])
     lengths = [number(deck, 'GRID', f'LENGTH_{c}') for c in 'XYZ']
@@ -264,10 +265,7 @@ def release_decay(time, radius, density, fluid_density, mu, terms=24):
 
 def released(runs):
     run = runs[0]
-    deck = read_namelist(Path(run) / 'run.nml')
-    rho = number(deck, 'FLUID', 'DENSITY')
-    mu = number(deck, 'FLUID', 'VISCOSITY') * rho
-    radius = number(deck, 'BODIES', 'RADIUS')
+    deck, rho, mu, radius = one_body_run(run)
     density = number(deck, 'PAIR', 'DENSITY')
     start = number(deck, 'BODIES', 'VELOCITY')
     length = number(deck, 'GRID', 'LENGTH_X')
