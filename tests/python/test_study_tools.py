@@ -389,6 +389,14 @@ def test_study_scripts_list_their_batches():
     batches = [line.split()[:2] for line in result.stdout.splitlines() if not line.startswith("forced")]
     assert batches == [[f"{shape}-{rung}", runs] for rung, runs in (("resolved", "60"), ("point", "120"))
                        for shape in ("needle", "disk", "sphere")]
+    result = run_tool([REPO / "tools" / "near-contact-study.sh", "--list", "--point-runs", "20",
+                       "--resolved-runs", "8", "--shapes", "needle disk"], cwd=REPO)
+    assert result.returncode == 0, result.stderr
+    lines = [line.split() for line in result.stdout.splitlines() if not line.startswith("forced")]
+    assert [line[:2] for line in lines] == [[f"{shape}-{rung}-{model}", runs]
+                                            for rung, runs in (("point", "20"), ("resolved", "8"))
+                                            for shape in ("needle", "disk") for model in ("omission", "lubrication")]
+    assert all(("collision.lubrication=.true." in line) == line[0].endswith("lubrication") for line in lines)
     result = run_tool([REPO / "tools" / "speed-accuracy-study.sh", "--list", "--shapes", "disk",
                        "--knobs", "diffusion substep"], cwd=REPO)
     assert result.returncode == 0, result.stderr
