@@ -15,7 +15,9 @@
 !>                  provider's (bodies_loads.dat);
 !>   particle sub-steps (with particles): &scene particle_substeps steps of dt / particle_substeps,
 !>                each one particle_system_step under the provider's loads (Newton-Euler, closest
-!>                points, collisions, DLVO: the interaction), then the pair's events and samples;
+!>                points, collisions, DLVO: the interaction), then the pair's events and samples
+!>                and, in a suspension with DLVO, its bonds (module agglomerate_tracking) and the
+!>                rows of clusters.h5 at the times of particles.h5's (module cluster_output);
 !>   end rule     &run end_time, max_steps, and the pair's (twice the first collision, 'settled');
 !>   progress, field outputs (&output field_interval), checkpoint (&output checkpoint_interval).
 !> Without a fluid (&scene fluid = 'none' or 'stokes') the same loop runs with no fluid stages and
@@ -23,7 +25,7 @@
 !> (core/timer_registry; the breakdown at the end of the log).
 !>
 !> Checkpoints: one transaction with the groups of what runs (fluid, forcing; particles and
-!> pair_scene; the provider's own, e.g. resolved_hydrodynamics), written at a fluid-step boundary
+!> pair_scene; a suspension's agglomerates; the provider's own, e.g. resolved_hydrodynamics), written at a fluid-step boundary
 !> after its events, sample and end test, so &run restart continues bit for bit. The last state
 !> is always kept, so a finished run can be continued with a later &run end_time.
 module scene_loop

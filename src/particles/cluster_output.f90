@@ -32,13 +32,13 @@ module cluster_output
   character(len=*), parameter :: cluster_bond_rule = 'bound in the DLVO well: E = mu v_n^2/2 + U(h) < U_b, h <= h_r'
 
   !> Datasets with a row per output time, per cluster entry, per bond entry and per event.
-  character(len=*), parameter :: row_sets(10) = [character(len=32) :: 'time', 'summary/clusters', 'summary/bonds', &
+  character(len=*), parameter :: row_sets(10) = [character(len=40) :: 'time', 'summary/clusters', 'summary/bonds', &
       'summary/mean_size_number', 'summary/mean_size_weight', 'summary/largest', 'summary/mean_coordination', &
       'summary/percolating', 'body/cluster', 'body/coordination']
-  character(len=*), parameter :: cluster_sets(6) = [character(len=32) :: 'cluster/size', 'cluster/radius_of_gyration', &
+  character(len=*), parameter :: cluster_sets(6) = [character(len=40) :: 'cluster/size', 'cluster/radius_of_gyration', &
       'cluster/radius_of_gyration_centres', 'cluster/gyration_eigenvalues', 'cluster/centre', 'cluster/percolating']
-  character(len=*), parameter :: bond_sets(2) = [character(len=32) :: 'bond/pair', 'bond/psi']
-  character(len=*), parameter :: event_sets(7) = [character(len=32) :: 'events/time', 'events/kind', 'events/pair', &
+  character(len=*), parameter :: bond_sets(2) = [character(len=40) :: 'bond/pair', 'bond/psi']
+  character(len=*), parameter :: event_sets(7) = [character(len=40) :: 'events/time', 'events/kind', 'events/pair', &
       'events/theta', 'events/phi', 'events/normal_speed', 'events/gap']
 
   !> An open clusters.h5 (only rank 0's copy is active). counts: rows, cluster entries, bond entries
@@ -73,7 +73,7 @@ contains
     do i = 1, size(row_sets)
       if (row_sets(i)(1:5) == 'body/') then
         call h5_append(out%file, trim(row_sets(i)), reshape([integer ::], [system%n, 0]))
-      else if (any(row_sets(i) == [character(len=32) :: 'time', 'summary/mean_size_number', &
+      else if (any(row_sets(i) == [character(len=40) :: 'time', 'summary/mean_size_number', &
                                    'summary/mean_size_weight', 'summary/mean_coordination'])) then
         call h5_append(out%file, trim(row_sets(i)), [real(wp) ::])
       else
