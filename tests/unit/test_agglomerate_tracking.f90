@@ -1,4 +1,4 @@
-! checks: 26
+! checks: 28
 !> Unit tests of agglomerate_tracking and the clusters of its bonds (docs/theory.md, "Agglomerates"),
 !> with calcite spheres of radius r and the paper's DLVO model (Table 1) in a periodic box of side L:
 !>  - three spheres at rest in a line along x across the periodic boundary, gaps h0 = 5 nm (the vdW
@@ -14,7 +14,8 @@
 !>    wraps change): the bonds carried (no event), each image equal to the minimum image of the moved
 !>    bodies, R_g unchanged;
 !>  - the chain's third body moved 300 nm further (beyond h_r, within the DLVO cut-off, so the pair
-!>    keeps its record): one breakage event (kind 2) for the pair (2, 3) at that gap;
+!>    keeps its record): one breakage event (kind 2) for the pair (2, 3) at that gap; then the first
+!>    body moved 2 um away (the pair loses its record): a breakage reported at its last gap h0;
 !>  - contact episodes counted per species pair: (1,1), (1,2), (2,2) in the order of species_pair_index.
 program test_agglomerate_tracking
   use agglo_kinds, only: wp, i8
@@ -138,6 +139,17 @@ contains
     call check_close(events(1)%gap, h0 + 300.0e-9_wp, 1.0e-6_wp, 'broken at gap h0 + 300 nm')
     call check(size(tracker%bonds) == 1 .and. tracker%formed == 2_i8 .and. tracker%broken == 1_i8, &
                'one bond left; 2 formed, 1 broken')
+
+    ! The first body 2 um away (beyond the DLVO cut-off: the pair (1,2) loses its record): broken,
+    ! reported with the last values it was seen with (gap h0).
+    call build_system(system, 0.7_wp * s, .false.)
+    system%bodies(1)%position(1) = system%bodies(1)%position(1) - 2.0e-6_wp
+    call particle_system_interact(system, 1.0e-7_wp)
+    call agglomerate_tracker_update(tracker, system, 3.0e-6_wp)
+    call agglomerate_take_events(tracker, events)
+    call check(size(events) == 2 .and. size(tracker%bonds) == 1, 'record lost: (1,2) broken, (2,3) formed again')
+    call check(events(1)%kind == event_broken .and. all(events(1)%pair == [1, 2]) .and. &
+               abs(events(1)%gap - h0) < 1.0e-15_wp, 'record lost: reported at its last gap h0')
   end subroutine chain_and_free_pairs
 
   subroutine species_counts()
