@@ -25,9 +25,10 @@
 !> (core/timer_registry; the breakdown at the end of the log).
 !>
 !> Checkpoints: one transaction with the groups of what runs (fluid, forcing; particles and
-!> pair_scene; a suspension's agglomerates; the provider's own, e.g. resolved_hydrodynamics), written at a fluid-step boundary
-!> after its events, sample and end test, so &run restart continues bit for bit. The last state
-!> is always kept, so a finished run can be continued with a later &run end_time.
+!> pair_scene; a suspension's agglomerates; the provider's own, e.g. resolved_hydrodynamics),
+!> written at a fluid-step boundary after its events, sample and end test, so &run restart
+!> continues bit for bit. The last state is always kept, so a finished run can be continued with a
+!> later &run end_time.
 module scene_loop
   use agglo_kinds, only: wp, i8
   use agglo_config, only: agglo_config_t
