@@ -34,6 +34,7 @@ module pair_protocol
   use config_grid, only: smallest_spacing
   use particle_system, only: particle_models_t, particle_loads_t, particle_system_t, particle_system_create, &
                              pair_body_image
+  use agglomerate_tracking, only: agglomerate_tracker_t, agglomerate_count_contact
   use pair_outcome, only: pair_outcome_t, pair_outcome_of, pair_outcome_rules_t, pair_outcome_rules_of, pair_state_t, &
                           pair_state_of, pair_history_t, pair_history_record
   use particle_output, only: particle_output_t, pair_run_metadata_t, particle_record_t, pair_record_t, &
@@ -224,12 +225,14 @@ contains
   !> After an interaction: the impulses and contact episodes of every pair (an episode's first
   !> impulse is an events row; the pair protocol's first one may set the paper's end time), the
   !> largest vdW force so far and, in the pair protocol, the pair's record for its outcome.
-  subroutine record_interaction(cfg, system, loop, output, summary)
+  !> tracker (a suspension's agglomerates): each contact episode begun is counted for its species pair.
+  subroutine record_interaction(cfg, system, loop, output, summary, tracker)
     type(agglo_config_t), intent(in) :: cfg
     type(particle_system_t), intent(in) :: system
     type(pair_loop_t), intent(inout) :: loop
     type(particle_output_t), intent(inout) :: output
     type(run_summary_t), intent(inout) :: summary
+    type(agglomerate_tracker_t), intent(inout), optional :: tracker
     type(collision_event_t) :: event
     type(pair_outcome_rules_t) :: rules
     integer, allocatable :: held(:,:)
@@ -254,6 +257,7 @@ contains
                 first=pair%first, second=pair%second)
             call append_collision_event(output, event)
             summary%contact_episodes = summary%contact_episodes + 1
+            if (present(tracker)) call agglomerate_count_contact(tracker, pair%first, pair%second)
             if (summary%contact_episodes == 1) then
               summary%has_first_collision = .true.
               summary%first_collision = event

@@ -15,7 +15,9 @@
 !>                  provider's (bodies_loads.dat);
 !>   particle sub-steps (with particles): &scene particle_substeps steps of dt / particle_substeps,
 !>                each one particle_system_step under the provider's loads (Newton-Euler, closest
-!>                points, collisions, DLVO: the interaction), then the pair's events and samples;
+!>                points, collisions, DLVO: the interaction), then the pair's events and samples
+!>                and, in a suspension with DLVO, its bonds (module agglomerate_tracking) and the
+!>                rows of clusters.h5 at the times of particles.h5's (module cluster_output);
 !>   end rule     &run end_time, max_steps, and the pair's (twice the first collision, 'settled');
 !>   progress, field outputs (&output field_interval), checkpoint (&output checkpoint_interval).
 !> Without a fluid (&scene fluid = 'none' or 'stokes') the same loop runs with no fluid stages and
@@ -23,9 +25,10 @@
 !> (core/timer_registry; the breakdown at the end of the log).
 !>
 !> Checkpoints: one transaction with the groups of what runs (fluid, forcing; particles and
-!> pair_scene; the provider's own, e.g. resolved_hydrodynamics), written at a fluid-step boundary
-!> after its events, sample and end test, so &run restart continues bit for bit. The last state
-!> is always kept, so a finished run can be continued with a later &run end_time.
+!> pair_scene; a suspension's agglomerates; the provider's own, e.g. resolved_hydrodynamics),
+!> written at a fluid-step boundary after its events, sample and end test, so &run restart
+!> continues bit for bit. The last state is always kept, so a finished run can be continued with a
+!> later &run end_time.
 module scene_loop
   use agglo_kinds, only: wp, i8
   use agglo_config, only: agglo_config_t
@@ -63,7 +66,11 @@ module scene_loop
   use particle_hydrodynamics, only: particle_hydrodynamics_t
   use scene_setup, only: start_fluid, next_output_time, hydrodynamics_of, add_fluid_motion, place_free_bodies, &
                          require_bodies_apart
-  use suspension_scene, only: place_suspension
+  use suspension_scene, only: place_suspension, start_suspension_agglomerates, write_suspension_agglomerates, &
+                              read_suspension_agglomerates
+  use bond_graph, only: component_labels
+  use agglomerate_tracking, only: agglomerate_tracker_t, agglomerate_tracker_update, agglomerate_bonds
+  use cluster_output, only: cluster_output_t, cluster_output_row, cluster_output_close
   implicit none
   private
   public :: run_scene
@@ -80,6 +87,7 @@ contains
     type(agglo_config_t), intent(in) :: cfg
     ! What runs: a resolved fluid, free particles (the pair protocol's system), and their provider.
     logical :: with_fluid, with_particles, with_pair, with_suspension
+    logical :: with_clusters                             ! a suspension with DLVO: bonds, clusters.h5
     character(len=:), allocatable :: scene_name
     type(fluid_solver_t) :: solver
     type(forcing_driver_t) :: forcing                    ! Eswaran-Pope body force (inactive when off)
@@ -93,6 +101,8 @@ contains
     type(pair_outcome_rules_t) :: rules
     type(particle_output_t) :: output
     type(run_summary_t) :: summary
+    type(agglomerate_tracker_t) :: tracker               ! the suspension's bonds (with_clusters)
+    type(cluster_output_t) :: clusters                   ! clusters.h5 (with_clusters)
     type(pair_loop_t) :: loop                            ! the particles' clock and the pair's records
     type(run_context_t) :: context                       ! the run's monitor, meters, stage timers, wall clocks
     real(wp) :: dt, step_start, rate, viscous_limit, next_field_time
@@ -107,6 +117,7 @@ contains
     if (cfg%scene%particles == 'free') scene_name = 'free bodies scene'
     if (.not. with_fluid) scene_name = 'pair scene'
     if (with_suspension) scene_name = 'suspension scene'
+    with_clusters = .false.
     substeps = 1
     if (with_fluid .and. with_particles) substeps = cfg%scene%particle_substeps
 
@@ -154,6 +165,8 @@ contains
       end if
       if (with_suspension) then
         call place_suspension(cfg, system)
+        with_clusters = system%models%dlvo
+        if (with_clusters) call start_suspension_agglomerates(cfg, system, tracker, clusters)
       else if (with_particles .and. .not. with_pair) then
         call place_free_bodies(cfg, solver, system)
       else if (with_pair) then
@@ -174,6 +187,7 @@ contains
       hydrodynamic = particle_loads_zero(system%n)
       if (cfg%run%restart) then
         if (with_particles) call read_pair_scene_group(restart, cfg, system, loop, summary, hydrodynamic, output)
+        if (with_clusters) call read_suspension_agglomerates(restart, tracker, clusters)
         if (.not. with_pair) loop%end_time = cfg%run%end_time   ! free bodies: no end at the first collision
         call hydrodynamics%read_checkpoint(restart)
         call checkpoint_close(restart)   ! every component has its state back
@@ -209,12 +223,11 @@ contains
           ! The checkpoint was written after its step's events, sample and end test: only the end
           ! test is repeated (the continued run's deck may set a later end).
           finished = end_rule()
-          if (finished .and. .not. sampled(cfg, loop%step)) call write_sample(output, loop%time, system, hydrodynamic, &
-                                                                            bodies_layout=with_suspension)
+          if (finished .and. .not. sampled(cfg, loop%step)) call write_rows()
         else
-          call record_interaction(cfg, system, loop, output, summary)
+          call record_particle_step()
           call felt_loads(0.0_wp)
-          call write_sample(output, loop%time, system, hydrodynamic, bodies_layout=with_suspension)
+          call write_rows()
           finished = with_fluid .and. end_rule()
         end if
       else
@@ -292,17 +305,32 @@ contains
         ! The last sub-step lands on the fluid's time exactly (no drift between the two clocks).
         loop%time = step_start + substep * dt_particle
         if (with_fluid .and. substep == substeps) loop%time = solver%time
-        call record_interaction(cfg, system, loop, output, summary)
+        call record_particle_step()
         ! The loads of the new state: the next sub-step's, and the sample's.
         call felt_loads(real(substep, wp) / substeps)
-        if (sampled(cfg, loop%step)) call write_sample(output, loop%time, system, hydrodynamic, &
-                                                       bodies_layout=with_suspension)
+        if (sampled(cfg, loop%step)) call write_rows()
       end do
       call timer_toc(context%timers%particles)
       finished = end_rule()
-      if (finished .and. .not. sampled(cfg, loop%step)) call write_sample(output, loop%time, system, hydrodynamic, &
-                                                                          bodies_layout=with_suspension)
+      if (finished .and. .not. sampled(cfg, loop%step)) call write_rows()
     end subroutine particle_substeps
+
+    !> The events of the particle step just taken: the contact episodes (record_interaction) and, in
+    !> a suspension with DLVO, the bond rule on every near pair (agglomerate_tracker_update).
+    subroutine record_particle_step()
+      if (with_clusters) then
+        call record_interaction(cfg, system, loop, output, summary, tracker)
+        call agglomerate_tracker_update(tracker, system, loop%time)
+      else
+        call record_interaction(cfg, system, loop, output, summary)
+      end if
+    end subroutine record_particle_step
+
+    !> A row of particles.h5 and, with agglomerates, of clusters.h5 (the same times).
+    subroutine write_rows()
+      call write_sample(output, loop%time, system, hydrodynamic, bodies_layout=with_suspension)
+      if (with_clusters) call cluster_output_row(clusters, loop%time, system, tracker)
+    end subroutine write_rows
 
     !> The pair's end rule (module pair_protocol) at the loop's step; free bodies end at &run
     !> end_time or max_steps.
@@ -421,12 +449,24 @@ contains
       call timer_tic(context%timers%fields)
       if (.not. (with_suspension .and. system%n > surface_bodies_most)) &
         call hydrodynamics%body_poses(solver, system, poses)
+      if (allocated(poses) .and. with_clusters) call label_clusters(poses)
       call begin_fluid_snapshot(snapshot, solver)
       if (allocated(poses)) &
         call field_snapshot_add_bodies(snapshot, poses, [solver%grid%lx, solver%grid%ly, solver%grid%lz])
       call field_snapshot_end(snapshot)
       call timer_toc(context%timers%fields)
     end subroutine output_fields
+
+    !> Each body's cluster (1..K, numbered by smallest body) on its drawn surface.
+    subroutine label_clusters(poses)
+      type(body_pose_t), intent(inout) :: poses(:)
+      integer, allocatable :: labels(:)
+      integer :: count
+      if (size(poses) /= system%n) return
+      allocate(labels(system%n))
+      call component_labels(system%n, agglomerate_bonds(tracker), labels, count)
+      poses%cluster = labels
+    end subroutine label_clusters
 
     !> One checkpoint transaction: each component that runs writes its group, then one commit.
     subroutine checkpoint(last)
@@ -439,6 +479,8 @@ contains
         call forcing_driver_write_checkpoint(forcing, transaction)
       end if
       if (with_particles) call write_pair_scene_group(transaction, cfg, system, loop, summary, hydrodynamic, output, last)
+      if (with_clusters) call write_suspension_agglomerates(transaction, tracker, clusters, &
+                                                            without_last_row=last .and. .not. sampled(cfg, loop%step))
       call hydrodynamics%write_checkpoint(transaction)
       call checkpoint_commit(transaction, cfg%output%checkpoints_kept)
       call timer_toc(context%timers%checkpoint)
@@ -454,6 +496,7 @@ contains
         ! can be continued with a later &run end_time.
         if (steps > 0) call checkpoint(last=.true.)
         call particle_output_close(output)
+        if (with_clusters) call cluster_output_close(clusters, tracker)
       else if (cfg%output%checkpoint_interval == 0 .or. &
                mod(solver%step, int(max(cfg%output%checkpoint_interval, 1), i8)) /= 0) then
         call checkpoint(last=.true.)   ! the fluid alone: unless its last step was a checkpoint's

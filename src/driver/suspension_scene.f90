@@ -8,7 +8,7 @@
 module suspension_scene
   use agglo_kinds, only: wp, i8
   use agglo_config, only: agglo_config_t
-  use error_handling, only: input_error
+  use error_handling, only: input_error, fatal
   use logger, only: log_line
   use text_format, only: int_text, real_text
   use progress_meter, only: scientific_text
@@ -21,9 +21,18 @@ module suspension_scene
                              particle_interaction_gap
   use suspension_placement, only: placement_t, place_bodies, random_relative_velocities
   use pair_protocol, only: particle_models_of
+  use run_directory, only: run_file
+  use hdf5_datasets, only: h5_write_array, h5_read_array
+  use checkpoint_files, only: checkpoint_t
+  use agglomerate_tracking, only: agglomerate_tracker_t, agglomerate_tracker_create, write_agglomerate_checkpoint, &
+                                  read_agglomerate_checkpoint
+  use cluster_output, only: cluster_output_t, cluster_output_open, cluster_output_continue, cluster_output_flush, &
+                            cluster_output_counts
   implicit none
   private
   public :: place_suspension, suspension_body_count, suspension_memory_estimate, suspension_stream_id
+  public :: start_suspension_agglomerates, write_suspension_agglomerates, read_suspension_agglomerates, &
+            suspension_species_names
 
   integer, parameter :: suspension_stream_id = 4
   !> Pair records per body the estimate allows for (the near pairs of a dilute suspension at the
@@ -178,4 +187,65 @@ contains
         scientific_text(models%interaction_gap)//' m; memory estimate '// &
         scientific_text(estimate / 2.0_wp**20)//' MiB')
   end subroutine place_suspension
+
+  !> The species of each body (1..S, in the order place_suspension creates them: species after species).
+  function suspension_species_of(cfg) result(species_of)
+    type(agglo_config_t), intent(in) :: cfg
+    integer, allocatable :: species_of(:)
+    integer(i8), allocatable :: counts(:)
+    integer :: k
+    counts = suspension_body_count(cfg)
+    species_of = [(spread(k, 1, int(counts(k))), k = 1, size(counts))]
+  end function suspension_species_of
+
+  !> The species' names in clusters.h5: the shape ('sphere', 'needle', ...), with _<k> added when
+  !> another species has the same shape.
+  function suspension_species_names(cfg) result(names)
+    type(agglo_config_t), intent(in) :: cfg
+    character(len=24), allocatable :: names(:)
+    integer :: k, s
+    s = species_count(cfg%suspension)
+    allocate(names(s))
+    do k = 1, s
+      names(k) = cfg%suspension%shape(k)
+      if (count(cfg%suspension%shape(1:s) == cfg%suspension%shape(k)) > 1) names(k) = trim(names(k))//'_'//int_text(k)
+    end do
+  end function suspension_species_names
+
+  !> The agglomerates of a suspension with DLVO (module agglomerate_tracking): the tracker of its
+  !> bodies and, unless the run continues a checkpoint (read_suspension_agglomerates), a new clusters.h5.
+  subroutine start_suspension_agglomerates(cfg, system, tracker, output)
+    type(agglo_config_t), intent(in) :: cfg
+    type(particle_system_t), intent(in) :: system
+    type(agglomerate_tracker_t), intent(out) :: tracker
+    type(cluster_output_t), intent(out) :: output
+    call agglomerate_tracker_create(tracker, system, suspension_species_of(cfg), species_count(cfg%suspension))
+    if (.not. cfg%run%restart) call cluster_output_open(output, run_file('clusters.h5'), system, tracker, &
+                                                        suspension_species_names(cfg))
+  end subroutine start_suspension_agglomerates
+
+  !> The tracker's group of an open checkpoint and the counts of clusters.h5 (its waiting events
+  !> written first); without_last_row: a finished run's extra last row is not kept.
+  subroutine write_suspension_agglomerates(transaction, tracker, output, without_last_row)
+    type(checkpoint_t), intent(in) :: transaction
+    type(agglomerate_tracker_t), intent(inout) :: tracker
+    type(cluster_output_t), intent(inout) :: output
+    logical, intent(in) :: without_last_row
+    call cluster_output_flush(output, tracker)
+    call write_agglomerate_checkpoint(transaction, tracker)
+    call h5_write_array(transaction%file, 'agglomerates/output_rows', cluster_output_counts(output, without_last_row))
+  end subroutine write_suspension_agglomerates
+
+  !> The tracker from an open checkpoint, and clusters.h5 continued from the counts it recorded.
+  subroutine read_suspension_agglomerates(restart, tracker, output)
+    type(checkpoint_t), intent(in) :: restart
+    type(agglomerate_tracker_t), intent(inout) :: tracker
+    type(cluster_output_t), intent(out) :: output
+    integer(i8), allocatable :: counts(:)
+    call read_agglomerate_checkpoint(restart, tracker)
+    call h5_read_array(restart%file, 'agglomerates/output_rows', counts)
+    if (size(counts) /= 4) call fatal('checkpoint '//restart%path//': agglomerates/output_rows is not 4 counts '// &
+                                      '(written by another version?)')
+    call cluster_output_continue(output, run_file('clusters.h5'), counts(1:4))
+  end subroutine read_suspension_agglomerates
 end module suspension_scene

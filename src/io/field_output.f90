@@ -31,6 +31,9 @@
 !>   /surface_names            string, blank-separated
 !> and each one becomes a Triangle grid of that time's spatial collection in fields.xdmf, so the
 !> surfaces share the snapshots' times, files and fate on restart (discard_snapshots_after).
+!> A surface may carry integer values per face (field_snapshot_add_surface_values, e.g. the cluster
+!> of a body): /surfaces/<name>/<value name> (n_faces), the value names listed in
+!> /surface_value_names (blank-separated), each a Cell attribute of its Triangle grid in fields.xdmf.
 module field_output
   use agglo_kinds, only: wp, i8
   use error_handling, only: fatal
@@ -47,7 +50,7 @@ module field_output
   private
   public :: field_snapshot_t, field_snapshot_begin, field_snapshot_add, field_snapshot_end, write_field_snapshot, &
             field_snapshot_name, discard_snapshots_after, at_cell_centre, at_x_face, at_y_face, at_z_face, &
-            field_snapshot_add_surface
+            field_snapshot_add_surface, field_snapshot_add_surface_values
 
   character(len=*), parameter :: at_cell_centre = 'centre'   !< pressure and other cell-centred fields
   character(len=*), parameter :: at_x_face = 'x_face'        !< u
@@ -65,6 +68,7 @@ module field_output
     real(wp) :: lengths(3) = 0.0_wp
     character(len=:), allocatable :: names, locations   !< blank-separated, in the order added
     character(len=:), allocatable :: surfaces           !< blank-separated names of the triangulated surfaces
+    character(len=:), allocatable :: surface_values     !< blank-separated names of the surfaces' face values
     character(len=:), allocatable :: directory
   end type field_snapshot_t
 
@@ -78,6 +82,8 @@ module field_output
     character(len=:), allocatable :: names, locations
     character(len=:), allocatable :: surfaces             !< blank-separated ('' without surfaces)
     integer, allocatable :: surface_vertices(:), surface_faces(:)   !< counts, one per surface
+    character(len=:), allocatable :: surface_values       !< blank-separated names of the face values
+    logical, allocatable :: has_values(:,:)               !< (value name, surface): the surface carries it
   end type snapshot_record_t
 
   !> Start a snapshot (collective): step (integer or integer(i8)), time in s, global shape (nx, ny, nz),
@@ -121,6 +127,7 @@ contains
     snapshot%names = ''
     snapshot%locations = ''
     snapshot%surfaces = ''
+    snapshot%surface_values = ''
     if (present(directory)) then
       call h5_create(snapshot%file, snapshot%directory//'/'//field_snapshot_name(step), complete_on_close=.true.)
     else   ! a file of the run: recorded in its manifest
@@ -181,6 +188,24 @@ contains
     snapshot%surfaces = trim(adjustl(snapshot%surfaces//' '//trim(name)))
   end subroutine field_snapshot_add_surface
 
+  !> Integer values per face of a surface already added (collective; rank 0's written), a Cell
+  !> attribute of its grid in fields.xdmf. name: letters, digits and '_'.
+  subroutine field_snapshot_add_surface_values(snapshot, surface, name, values)
+    type(field_snapshot_t), intent(inout) :: snapshot
+    character(len=*), intent(in) :: surface, name
+    integer, intent(in) :: values(:)
+    if (len_trim(name) == 0 .or. len_trim(name) > word_length .or. &
+        verify(trim(name), 'abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_') /= 0) &
+      call fatal('field_output: surface value name "'//trim(name)//'" must be 1-64 letters, digits or _')
+    if (any(trim(name) == [character(len=8) :: 'vertices', 'faces'])) &
+      call fatal('field_output: surface value name "'//trim(name)//'" is taken by the mesh')
+    if (index(' '//snapshot%surfaces//' ', ' '//trim(surface)//' ') == 0) &
+      call fatal('field_output: surface values '//trim(name)//' for '//trim(surface)//', a surface not added')
+    call h5_write_array(snapshot%file, 'surfaces/'//trim(surface)//'/'//trim(name), values)
+    if (index(' '//snapshot%surface_values//' ', ' '//trim(name)//' ') == 0) &
+      snapshot%surface_values = trim(adjustl(snapshot%surface_values//' '//trim(name)))
+  end subroutine field_snapshot_add_surface_values
+
   !> Finish a snapshot (collective): metadata, close, rename complete, rebuild fields.xdmf.
   subroutine field_snapshot_end(snapshot)
     type(field_snapshot_t), intent(inout) :: snapshot
@@ -192,6 +217,8 @@ contains
     call h5_write_string(snapshot%file, 'field_names', snapshot%names)
     call h5_write_string(snapshot%file, 'field_locations', snapshot%locations)
     if (len(snapshot%surfaces) > 0) call h5_write_string(snapshot%file, 'surface_names', snapshot%surfaces)
+    if (len(snapshot%surface_values) > 0) call h5_write_string(snapshot%file, 'surface_value_names', &
+                                                               snapshot%surface_values)
     call h5_close(snapshot%file)   ! renames the .tmp file once every rank has written
     if (is_root()) then
       if (snapshot%directory == run_directory_path()) call record_run_file(xdmf_name)
@@ -335,15 +362,22 @@ contains
   subroutine read_surface_counts(file, record)
     type(h5_file_t), intent(in) :: file
     type(snapshot_record_t), intent(inout) :: record
-    character(len=word_length), allocatable :: names(:)
-    integer :: s
+    character(len=word_length), allocatable :: names(:), values(:)
+    integer :: s, v
     record%surfaces = ''
+    record%surface_values = ''
     if (h5_exists(file, 'surface_names')) call h5_read_string(file, 'surface_names', record%surfaces)
+    if (h5_exists(file, 'surface_value_names')) call h5_read_string(file, 'surface_value_names', record%surface_values)
     names = words(record%surfaces)
-    allocate(record%surface_vertices(size(names)), record%surface_faces(size(names)))
+    values = words(record%surface_values)
+    allocate(record%surface_vertices(size(names)), record%surface_faces(size(names)), &
+             record%has_values(size(values), size(names)))
     do s = 1, size(names)
       record%surface_vertices(s) = second_dimension('surfaces/'//trim(names(s))//'/vertices')
       record%surface_faces(s) = second_dimension('surfaces/'//trim(names(s))//'/faces')
+      do v = 1, size(values)
+        record%has_values(v, s) = h5_exists(file, 'surfaces/'//trim(names(s))//'/'//trim(values(v)))
+      end do
     end do
   contains
     integer function second_dimension(name)
@@ -451,10 +485,11 @@ contains
   subroutine write_xdmf_surfaces(unit, record)
     integer, intent(in) :: unit
     type(snapshot_record_t), intent(in) :: record
-    character(len=word_length), allocatable :: names(:)
+    character(len=word_length), allocatable :: names(:), values(:)
     character(len=:), allocatable :: group
-    integer :: s
+    integer :: s, v
     names = words(record%surfaces)
+    values = words(record%surface_values)
     do s = 1, size(names)
       group = trim(record%file_name)//':/surfaces/'//trim(names(s))
       write(unit, '(a)') '        <Grid Name="'//trim(names(s))//'" GridType="Uniform">'
@@ -467,6 +502,13 @@ contains
       write(unit, '(a)') '            <DataItem Dimensions="'//int_text(record%surface_vertices(s))//' 3" '// &
                          'NumberType="Float" Precision="8" Format="HDF">'//group//'/vertices</DataItem>'
       write(unit, '(a)') '          </Geometry>'
+      do v = 1, size(values)
+        if (.not. record%has_values(v, s)) cycle
+        write(unit, '(a)') '          <Attribute Name="'//trim(values(v))//'" AttributeType="Scalar" Center="Cell">'
+        write(unit, '(a)') '            <DataItem Dimensions="'//int_text(record%surface_faces(s))//'" '// &
+                           'NumberType="Int" Precision="4" Format="HDF">'//group//'/'//trim(values(v))//'</DataItem>'
+        write(unit, '(a)') '          </Attribute>'
+      end do
       write(unit, '(a)') '        </Grid>'
     end do
   end subroutine write_xdmf_surfaces

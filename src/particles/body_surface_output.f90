@@ -6,6 +6,8 @@
 !>   /surfaces/body_<n>/centre       (3)  m, lab frame, wrapped into the box [0, L)
 !>   /surfaces/body_<n>/orientation  (4)  quaternion body -> lab, scalar first
 !>   /surfaces/body_<n>/semi_axes    (2)  m, a (symmetry axis, body x) and b (body y, z)
+!>   /surfaces/body_<n>/cluster      (n_faces) integer, the body's cluster (poses with cluster > 0:
+!>                                   a suspension's agglomerates), a Cell attribute in fields.xdmf
 !> vertex = centre + R(q) (a x, b y, b z) for the unit icosphere's vertex (x, y, z), so every vertex
 !> lies on the spheroid surface of that pose. A body that crosses the box faces is drawn whole at
 !> its wrapped centre (its periodic image is not drawn). Any scene calls it with a list of poses.
@@ -17,7 +19,7 @@ module body_surface_output
   use spheroid, only: spheroid_t
   use quaternion, only: rotation_matrix
   use icosphere_mesh, only: icosphere_mesh_t, build_icosphere_mesh
-  use field_output, only: field_snapshot_t, field_snapshot_add_surface
+  use field_output, only: field_snapshot_t, field_snapshot_add_surface, field_snapshot_add_surface_values
   use particle_system, only: particle_system_t
   implicit none
   private
@@ -32,6 +34,7 @@ module body_surface_output
     type(spheroid_t) :: shape
     real(wp) :: centre(3) = 0                                       !< m, lab frame
     real(wp) :: orientation(4) = [1.0_wp, 0.0_wp, 0.0_wp, 0.0_wp]   !< body -> lab, scalar first
+    integer :: cluster = 0                                          !< agglomerate number; 0 = none drawn
   end type body_pose_t
 
 contains
@@ -67,6 +70,8 @@ contains
       call h5_write_array(snapshot%file, 'surfaces/'//name//'/centre', centre)
       call h5_write_array(snapshot%file, 'surfaces/'//name//'/orientation', bodies(n)%orientation)
       call h5_write_array(snapshot%file, 'surfaces/'//name//'/semi_axes', [bodies(n)%shape%a, bodies(n)%shape%b])
+      if (bodies(n)%cluster > 0) call field_snapshot_add_surface_values(snapshot, name, 'cluster', &
+                                                                        spread(bodies(n)%cluster, 1, size(mesh%faces, 2)))
       deallocate(vertices)
     end do
   end subroutine field_snapshot_add_bodies

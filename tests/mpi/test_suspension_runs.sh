@@ -11,7 +11,8 @@
 #    first sample's positions and orientations bit for bit), start velocities with the fluid's at
 #    the centres (not the random ones alone), and after 4 fluid steps positions and velocities
 #    within 1e-9 relative of each other (round-off of the field's sums over the slabs); on 2 ranks
-#    2 fluid steps + &run restart to 4 give the 4-step particles.h5 and checkpoint bit for bit;
+#    2 fluid steps + &run restart to 4 give the 4-step particles.h5, clusters.h5 (DLVO is on by
+#    default: the bodies' agglomerates) and checkpoint bit for bit;
 #  - ghost mode (&suspension ghost): 191 spheres at 10%, 20 mm/s rms, 4000 steps: every body's
 #    velocity unchanged (bit for bit: no impulse, no DLVO), so the momentum is the start's; bodies
 #    pass through each other (a negative gap logged); the collisions counted are exactly the
@@ -71,8 +72,13 @@ mpirun -np 2 "$AGGLO" point.nml --set "output.directory='two'" > two.out 2>&1
 mpirun -np 2 "$AGGLO" point.nml --set "output.directory='twosplit'" --set run.max_steps=2 > split3.out 2>&1
 mpirun -np 2 "$AGGLO" point.nml --set "output.directory='twosplit'" --set run.restart=.true. > split4.out 2>&1
 if h5diff -q two/particles.h5 twosplit/particles.h5 && \
-   h5diff -q two/checkpoints/checkpoint_0000000004.h5 twosplit/checkpoints/checkpoint_0000000004.h5; then
-  echo "PASS suspension/point_restart_bit_for_bit  (2 + 2 fluid steps on 2 ranks: particles.h5 and the last checkpoint)"
+   h5diff -q two/checkpoints/checkpoint_0000000004.h5 twosplit/checkpoints/checkpoint_0000000004.h5 && \
+   "$python" -c 'import sys, h5py, numpy as np
+a, b = h5py.File("two/clusters.h5", "r"), h5py.File("twosplit/clusters.h5", "r")
+names = lambda f: (lambda out: (f.visit(out.append), sorted(out))[1])([])
+sys.exit(0 if names(a) == names(b) and all(isinstance(a[n], h5py.Group) or (a[n].shape == b[n].shape and
+         np.array_equal(a[n][()], b[n][()])) for n in names(a)) and len(a["time"]) == 5 else 1)'; then
+  echo "PASS suspension/point_restart_bit_for_bit  (2 + 2 fluid steps on 2 ranks: particles.h5, clusters.h5 and the last checkpoint)"
 else echo "FAIL suspension/point_restart_bit_for_bit: $(grep -m1 error split4.out)"; fi
 "$python" - <<'PY'
 import h5py, numpy as np
