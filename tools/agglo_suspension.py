@@ -341,7 +341,7 @@ def _box_volume(run):
         return None
     volume = 1.0
     for axis in "xyz":
-        match = re.search(rf"length_{axis}\s*=\s*([-+0-9.]+(?:[eEdD][-+]?[0-9]+)?)", text)
+        match = re.search(rf"length_{axis}\s*=\s*([-+0-9.]+(?:[eEdD][-+]?[0-9]+)?)", text, re.I)
         if match is None:
             return None
         volume *= float(match.group(1).replace("d", "e").replace("D", "e"))
@@ -690,6 +690,10 @@ def main(arguments):
         json.dump(_json_ready(document), handle, indent=1)
     os.replace(os.path.join(out, "suspension.json.tmp"), os.path.join(out, "suspension.json"))
     print_table(table)
+    bare = [r for r in runs if not r.has_clusters]
+    if bare:
+        print(f"note: {len(bare)} of {len(runs)} run(s) hold no clusters.h5 (a run without DLVO, or a "
+              f"code without cluster output): collision rates only, from particles.h5's events")
     if skipped:
         print(f"skipped {len(skipped)} run(s) of {len(skipped) + len(runs)}:")
         for directory, reason in skipped[:20]:
