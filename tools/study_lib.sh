@@ -1,7 +1,7 @@
 # study_lib.sh: what the study scripts (tools/chaotic-study.sh, tools/quiescent-resolved-study.sh,
 # tools/speed-accuracy-study.sh, tools/suspension-study.sh) share: their common options, one
-# Monte-Carlo batch per call of study_batch (local, --status or --slurm), the converged forced fields they start from, and the
-# record of every batch's wall time. Sourced, never run; docs/tools.md ("Study scripts") explains it.
+# Monte-Carlo batch per call of study_batch (local, --status or --slurm), the converged forced
+# fields they start from, and the record of every batch's wall time. Sourced, never run; docs/tools.md ("Study scripts") explains it.
 # The caller sets study_name and defines study_usage_specific (its own part of --help) before
 # sourcing, then calls study_parse_arguments "$@", declares its batches and calls study_finish.
 
@@ -43,8 +43,7 @@ Common options:
       --no-analysis        skip the statistics and figures at the end
       --publish            after the analysis, copy its figures (PNG) and small tables (rates,
                            means, illustrative runs, suspension tables, comparisons, costs; not
-                           runs.csv) into
-                           docs/figures/<study>/ (or $AGGLO_STUDY_PUBLISH_DIR) as
+                           runs.csv) into docs/figures/<study>/ (or $AGGLO_STUDY_PUBLISH_DIR) as
                            <stats directory>_<file>, the output root removed from paths inside
   -h, --help               this text
 
