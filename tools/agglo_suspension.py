@@ -105,11 +105,17 @@ def fractal_dimension(sizes, radii):
 
 
 def _text(value):
-    if isinstance(value, bytes):
-        return value.decode()
+    """A string of an HDF5 dataset or attribute (bytes or str, fixed-length ones blank-padded)."""
     if hasattr(value, "tolist"):
         value = value.tolist()
-    return value.decode() if isinstance(value, bytes) else str(value)
+    return (value.decode() if isinstance(value, bytes) else str(value)).strip()
+
+
+def _names(value):
+    """The species names of the species_names attribute (an array of strings, or one string)."""
+    if isinstance(value, (str, bytes)) or getattr(value, "ndim", 1) == 0:
+        return [_text(value)]
+    return [_text(name) for name in value]
 
 
 class SuspensionRun:
@@ -149,7 +155,7 @@ class SuspensionRun:
                     radius = float(h5["radius"][()])
         if os.path.exists(self.path(CLUSTER_FILE)):
             with h5py.File(self.path(CLUSTER_FILE), "r") as h5:
-                names = [_text(n) for n in h5.attrs.get("species_names", [])]
+                names = _names(h5.attrs.get("species_names", []))
                 if len(names) > 1:
                     shape = "mixed"
                 elif shape is None and names:
@@ -357,10 +363,10 @@ def collision_rates(run):
     if run.has_clusters:
         data = run.clusters()
         time = np.asarray(data["time"], float)
-        counts = np.asarray(data["collisions/count"], float)
+        counts = np.asarray(data["collisions/count"], float).reshape(time.size, -1)
         if time.size < 2 or counts.size == 0:
             return {}
-        names = [_text(n) for n in data["attrs"].get("species_names", [])]
+        names = _names(data["attrs"].get("species_names", []))
         pairs = np.asarray(data["collisions/species_pairs"], int).reshape(-1, 2)
         volume = float(data["collisions/volume"])
         span = time[-1] - time[0]
@@ -532,7 +538,8 @@ def _figures(groups, results, runs, out, times, snapshot_time):
             axis.set_yscale("log")
             axis.set_xlabel("cluster size s")
             axis.set_title(f"t = {t * 1e3:g} ms", fontsize=9)
-            axis.legend(fontsize=8)
+            if axis.get_legend_handles_labels()[0]:
+                axis.legend(fontsize=8)
         axes[0][0].set_ylabel("fraction of clusters n_s / K")
         figure.tight_layout()
         written += _save(figure, out, "suspension_sizes")
@@ -555,8 +562,10 @@ def _figures(groups, results, runs, out, times, snapshot_time):
     axis.set_xlabel("cluster size N")
     axis.set_ylabel("radius of gyration (um)")
     axis.set_title(f"Clusters of >= {FRACTAL_MIN_SIZE} bodies, not percolating, last row", fontsize=9)
-    if with_clusters:
+    if axis.get_legend_handles_labels()[0]:
         axis.legend(fontsize=8)
+    else:
+        axis.text(0.5, 0.5, f"no cluster of >= {FRACTAL_MIN_SIZE} bodies", transform=axis.transAxes, ha="center")
     written += _save(figure, out, "suspension_gyration")
     plt.close(figure)
 
@@ -707,9 +716,10 @@ def main(arguments):
 
 def _show(value, form=".4g"):
     try:
-        return format(float(value), form) if value != "" else "-"
+        number = float(value)
     except (TypeError, ValueError):
         return "-"
+    return format(number, form) if math.isfinite(number) else "-"
 
 
 def print_table(table):
