@@ -131,7 +131,7 @@ class SuspensionRun:
         if os.path.exists(summary):
             with open(summary) as handle:
                 self.summary = json.load(handle)
-        self.shape, self.seed, self.radius = self._identity()
+        self.shape, self.seed, self.radius, self.bodies = self._identity()
 
     @property
     def label(self):
@@ -141,10 +141,10 @@ class SuspensionRun:
         return os.path.join(self.directory, name)
 
     def _identity(self):
-        """(shape, seed, radius) from particles.h5, else the summary; shape 'mixed' when
-        clusters.h5 names several species."""
+        """(shape, seed, radius, bodies) from particles.h5, else the summary and clusters.h5;
+        shape 'mixed' when clusters.h5 names several species."""
         import h5py
-        shape, seed, radius = self.summary.get("shape"), self.summary.get("seed"), None
+        shape, seed, radius, bodies = self.summary.get("shape"), self.summary.get("seed"), None, None
         if os.path.exists(self.path(PARTICLE_FILE)):
             with h5py.File(self.path(PARTICLE_FILE), "r") as h5:
                 if "shape" in h5:
@@ -153,14 +153,18 @@ class SuspensionRun:
                     seed = int(h5["seed"][()])
                 if "radius" in h5:
                     radius = float(h5["radius"][()])
+                if "bodies" in h5:
+                    bodies = int(h5["bodies"][()])
         if os.path.exists(self.path(CLUSTER_FILE)):
             with h5py.File(self.path(CLUSTER_FILE), "r") as h5:
                 names = _names(h5.attrs.get("species_names", []))
+                if bodies is None and "bodies" in h5.attrs:
+                    bodies = int(h5.attrs["bodies"])
                 if len(names) > 1:
                     shape = "mixed"
                 elif shape is None and names:
                     shape = names[0]
-        return shape or "unknown", seed, radius
+        return shape or "unknown", seed, radius, bodies
 
     def clusters(self):
         """The datasets of clusters.h5 as numpy arrays (dict by path), read once."""
@@ -387,6 +391,24 @@ def collision_rates(run):
     return {f"{run.shape}-{run.shape}": inside / span / volume}
 
 
+def collision_kernel(run, rates):
+    """Collision kernel (m^3/s) of a run of one species: the rate per unit volume over the pairs per
+    unit volume, Gamma / (n^2 / 2) with n = N / V (Saffman & Turner 1956 define the rate so), the
+    number that compares runs of different body counts and, ghost against real collisions, gives
+    the collision efficiency. None for several species (clusters.h5 does not give each species'
+    count) or without the body count."""
+    if len(rates) != 1 or not run.bodies:
+        return None
+    if run.has_clusters:
+        volume = float(run.clusters()["collisions/volume"])
+    else:
+        volume = _box_volume(run)
+    if not volume:
+        return None
+    density = run.bodies / volume
+    return next(iter(rates.values())) / (0.5 * density * density)
+
+
 def group_statistics(members, times, rg_kind):
     """Every number of one group (JSON-ready) and the arrays its figures need."""
     import numpy as np
@@ -421,6 +443,10 @@ def group_statistics(members, times, rg_kind):
     stats["collision_rate"] = {name: dict(zip(("mean", "low", "high"),
                                               mean_interval([rates.get(name, math.nan) for rates in per_run])))
                                for name in names}
+    kernels = [collision_kernel(r, rates) for r, rates in zip(members, per_run)]
+    kernels = [k for k in kernels if k is not None]
+    stats["collision_kernel"] = dict(zip(("mean", "low", "high"), mean_interval(kernels))) \
+        if kernels and len(names) == 1 else None
     return stats, arrays
 
 
@@ -433,7 +459,8 @@ TABLE_COLUMNS = ("group", "runs", "final_time",
                  "mean_size_weight", "mean_size_weight_low", "mean_size_weight_high",
                  "bonds", "bonds_low", "bonds_high", "largest",
                  "fractal_dimension", "fractal_low", "fractal_high", "fractal_clusters",
-                 "psi_mean", "psi_median", "psi_bond_rows", "collision_rates")
+                 "psi_mean", "psi_median", "psi_bond_rows", "collision_kernel", "collision_kernel_low",
+                 "collision_kernel_high", "collision_rates")
 
 
 def table_row(group, stats):
@@ -449,6 +476,10 @@ def table_row(group, stats):
         row.update(fractal_dimension=fractal["D"], fractal_low=fractal["low"], fractal_high=fractal["high"],
                    fractal_clusters=fractal["clusters"], psi_mean=stats["psi"]["mean"],
                    psi_median=stats["psi"]["median"], psi_bond_rows=stats["psi"]["bond_rows"])
+    if stats.get("collision_kernel"):
+        kernel = stats["collision_kernel"]
+        row.update(collision_kernel=kernel["mean"], collision_kernel_low=kernel["low"],
+                   collision_kernel_high=kernel["high"])
     row["collision_rates"] = "; ".join(f"{name} {value['mean']:.6g} [{value['low']:.6g}, {value['high']:.6g}]"
                                        for name, value in stats["collision_rate"].items())
     return row
@@ -468,7 +499,8 @@ def _json_ready(value):
 
 def comparison_rows(table, rungs):
     """Rows of suspension_comparison.csv: for groups named SHAPE-RUNG (--group-by batch) the two
-    rungs of each shape side by side (mean cluster size, bonds, fractal dimension, psi)."""
+    rungs of each shape side by side (mean cluster size, bonds, fractal dimension, psi, collision
+    kernel) with the ratio second / first."""
     first, second = rungs
     by_name = {row["group"]: row for row in table}
     shapes = sorted({name.rsplit("-", 1)[0] for name in by_name
@@ -477,7 +509,8 @@ def comparison_rows(table, rungs):
     rows = []
     for shape in shapes:
         a, b = by_name.get(f"{shape}-{first}"), by_name.get(f"{shape}-{second}")
-        for quantity in ("mean_size_number", "mean_size_weight", "bonds", "fractal_dimension", "psi_mean"):
+        for quantity in ("mean_size_number", "mean_size_weight", "bonds", "fractal_dimension", "psi_mean",
+                         "collision_kernel"):
             low = {"fractal_dimension": "fractal_low"}.get(quantity, f"{quantity}_low")
             high = {"fractal_dimension": "fractal_high"}.get(quantity, f"{quantity}_high")
             row = {"shape": shape, "quantity": quantity}
@@ -738,6 +771,9 @@ def print_table(table):
               f"{_show(row['psi_mean'], '.3f'):>8}")
         if row["collision_rates"]:
             print(f"{'':<{width}} collision rate (1/(m^3 s)): {row['collision_rates']}")
+        if row["collision_kernel"] != "":
+            print(f"{'':<{width}} collision kernel (m^3/s): "
+                  f"{triple(row, 'collision_kernel', 'collision_kernel_low', 'collision_kernel_high')}")
 
 
 def print_comparison(rows, rungs):

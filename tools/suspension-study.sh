@@ -29,10 +29,12 @@ root after `make build tools-deps`.
   2. statistics and figures (tools/agglo-stats --suspension): OUT/stats-point, OUT/stats-resolved
      (per shape: mean cluster size and bonds against time with seed-to-seed t intervals, size
      distributions at --times, radius of gyration against size with the fractal dimension, psi of
-     bonded neighbours, collision rates, a 3D snapshot coloured by cluster), OUT/stats-ghost (the
-     ghost collision rate) and OUT/stats-comparison/suspension_comparison.csv, copied to
-     OUT/comparison.csv: point against resolved per shape (mean cluster size, bonds, fractal
-     dimension, mean psi, each with its interval, and the ratio resolved / point)
+     bonded neighbours, collision rates and kernels, a 3D snapshot coloured by cluster),
+     OUT/stats-ghost (the ghost collision rate and kernel), OUT/stats-collision (the point spheres'
+     collision kernel over the ghost spheres': the collision efficiency) and
+     OUT/stats-comparison/suspension_comparison.csv, copied to OUT/comparison.csv: point against
+     resolved per shape (mean cluster size, bonds, fractal dimension, mean psi, collision kernel,
+     each with its interval, and the ratio resolved / point)
   3. OUT/batch_times.tsv (every local batch call) and OUT/batch_costs.tsv (per batch)
 
 Options of this study:
@@ -139,7 +141,12 @@ if [ "$study_mode" = run ] && (( study_analysis )); then
     all+=("${names[@]}")
     stats "$study_out/stats-$rung" --times "$times" -- "${names[@]}"
   done
-  (( ghost_runs > 0 )) && stats "$study_out/stats-ghost" --no-figures -- sphere-ghost
+  if (( ghost_runs > 0 )); then
+    stats "$study_out/stats-ghost" --no-figures -- sphere-ghost
+    # The collision efficiency: the point spheres' collision kernel over the ghost spheres'.
+    [[ " ${rung_list[*]} " == *" point "* && " ${shape_list[*]} " == *" sphere "* ]] && \
+      stats "$study_out/stats-collision" --group-by batch --no-figures --compare ghost,point -- sphere-ghost sphere-point
+  fi
   rm -f "$study_out/comparison.csv"
   if (( ${#rung_list[@]} == 2 )); then
     stats "$study_out/stats-comparison" --group-by batch --no-figures \

@@ -129,6 +129,7 @@ def test_psi_of_random_orientations_and_collision_rates(spaced_tmp):
     for name, rate in rates.items():
         assert group["collision_rate"][name]["mean"] == pytest.approx(rate, rel=1e-6), name
     assert "fractal" in group and group["fractal"]["D"] is None       # no cluster of >= 3 bodies
+    assert group["collision_kernel"] is None     # several species: their counts are not in clusters.h5
 
 
 def test_point_and_resolved_compared_per_shape(spaced_tmp):
@@ -143,6 +144,26 @@ def test_point_and_resolved_compared_per_shape(spaced_tmp):
     assert float(rows["mean_size_number"]["resolved"]) == pytest.approx(3.0)
     assert float(rows["mean_size_number"]["ratio"]) == pytest.approx(1.5)
     assert rows["fractal_dimension"]["shape"] == "sphere"
+
+
+def test_collision_kernel_and_the_efficiency_against_ghost_collisions(spaced_tmp):
+    # 100 spheres in 1 mm^3: n = 1e11 per m^3, so the kernel is the rate / (n^2 / 2) = rate / 5e21.
+    times = np.linspace(0.0, 1e-3, 3)
+    for batch, rate in (("sphere-ghost", 4.0e12), ("sphere-point", 1.0e12)):
+        for k in (1, 2):
+            counts = np.array([[round(rate * 1e-9 * t)] for t in times])
+            write_run(str(spaced_tmp / batch / f"run_{k:04d}"), list(times), [Row(100)] * 3, seed=k,
+                      counts=counts)
+    out = spaced_tmp / "stats"
+    result = run_tool([AGGLO_STATS, spaced_tmp / "sphere-ghost", spaced_tmp / "sphere-point", "-o", out,
+                       "--group-by", "batch", "--compare", "ghost,point", "--no-figures"])
+    assert result.returncode == 0, result.stderr + result.stdout
+    table = {row["group"]: row for row in read_csv(out / "suspension_table.csv")}
+    assert float(table["sphere-ghost"]["collision_kernel"]) == pytest.approx(4.0e12 / 5e21, rel=1e-6)
+    assert float(table["sphere-point"]["collision_kernel"]) == pytest.approx(1.0e12 / 5e21, rel=1e-6)
+    rows = {r["quantity"]: r for r in read_csv(out / "suspension_comparison.csv")}
+    assert float(rows["collision_kernel"]["ratio"]) == pytest.approx(0.25, rel=1e-6)   # the efficiency
+    assert "collision kernel (m^3/s): 8e-10 [8e-10, 8e-10]" in result.stdout
 
 
 def test_suspension_options_are_refused_for_pair_batches(spaced_tmp):

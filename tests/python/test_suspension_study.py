@@ -88,6 +88,7 @@ def test_suspension_study_runs_resumes_and_analyses(spaced_tmp, agglo):
     # The ghost batch ran in ghost mode (the resolved deck the code wrote, run.nml).
     assert re.search(r"^\s*GHOST\s*=\s*T,", (out / "sphere-ghost" / "run_0001" / "run.nml").read_text(), re.M)
     for path in ("stats-point/suspension_table.csv", "stats-point/suspension.json",
+                 "stats-collision/suspension_comparison.csv",
                  "stats-point/suspension_collision_rate.png", "stats-ghost/suspension_table.csv"):
         assert (out / path).exists(), path
     costs = read_tsv(out / "batch_costs.tsv")
