@@ -9,6 +9,8 @@ Outcomes (docs/theory.md, "Run outcome"): agglomerated (bound), rebounded, appro
 range without touching, then escaped) and no_contact; every class but agglomerated counts as not
 agglomerated. Summaries written before 'approached', contact_episodes and ended_in_flight existed
 are read as they are (no run of theirs is 'approached'; episodes from particles.h5).
+Suspension runs (clusters.h5; `--suspension`, or found by their files) are read by
+agglo_suspension.py instead: cluster statistics per shape (docs/tools.md, "Suspension runs").
 Run it through the launcher tools/agglo-stats (it picks the repository's .venv).
 """
 import argparse
@@ -890,7 +892,9 @@ def parse_arguments(argv):
                     "and the agglomeration rate (agglomerated / runs) with its Wilson score 95% "
                     "interval; writes runs.csv, rates.csv and the figures (PNG and PDF).",
         epilog="Runs without summary.json (incomplete) or with a FAILED marker are skipped and "
-               "counted. Exit status: 0 done, 1 no usable run or unreadable input, 2 usage.")
+               "counted. Suspension runs (clusters.h5) get the cluster statistics instead (their options "
+               "above; docs/tools.md, 'Suspension runs'). "
+               "Exit status: 0 done, 1 no usable run or unreadable input, 2 usage.")
     parser.add_argument("roots", nargs="+", metavar="BATCH",
                         help="batch output root (or a single run directory); several are merged")
     parser.add_argument("-o", "--out", metavar="DIR",

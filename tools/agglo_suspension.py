@@ -691,6 +691,9 @@ def main(arguments):
     out = arguments.out or os.path.join(arguments.roots[0], "stats")
     os.makedirs(out, exist_ok=True)
     times = list(arguments.times or [])
+    if not times:      # the last row of every run (the nearest row to the latest end)
+        ends = [float(r.clusters()["time"][-1]) for r in runs if r.has_clusters and len(r.clusters()["time"])]
+        times = [max(ends)] if ends else []
     results = {group: group_statistics([r for r in runs if r.group == group], times, arguments.rg)
                for group in groups}
     table = [table_row(group, results[group][0]) for group in groups]

@@ -130,6 +130,9 @@ def test_psi_of_random_orientations_and_collision_rates(spaced_tmp):
         assert group["collision_rate"][name]["mean"] == pytest.approx(rate, rel=1e-6), name
     assert "fractal" in group and group["fractal"]["D"] is None       # no cluster of >= 3 bodies
     assert group["collision_kernel"] is None     # several species: their counts are not in clusters.h5
+    # Without --times the size distribution is the last row's: one pair and 8 single bodies.
+    sizes = read_csv(out / "suspension_sizes.csv")
+    assert {(float(r["time"]), int(r["size"]), int(r["count"])) for r in sizes} == {(2e-3, 1, 8), (2e-3, 2, 1)}
 
 
 def test_point_and_resolved_compared_per_shape(spaced_tmp):
