@@ -46,6 +46,9 @@ Options of this study:
       --grid N            grid N^3 of every batch (default the decks' 128) and the converged field
                           output/hit_box_N/final_field.h5 they start from; resolved needles need
                           N >= 69 (4 cells thick), so 72 is the smallest grid for all three shapes
+      --regrid-field      with --grid N: start from the decks' 128^3 field resampled onto N^3
+                          (output/hit_box_128_on_N/final_field.h5, tools/regrid_field.py, seconds)
+                          instead of a field converged on N^3 (minutes to hours)
       --bodies N          bodies of the point and resolved batches (default the decks' 64)
       --ghost-bodies N    bodies of the ghost batch (default 64)
       --ghost-radius R    volume-equivalent radius of the ghost spheres (m; default 50e-6)
@@ -61,7 +64,7 @@ EOF
 source "$(dirname "${BASH_SOURCE[0]}")/study_lib.sh"
 study_parse_arguments "$@"
 runs=8 ghost_runs='' shapes="needle disk sphere" rungs="point resolved" end_time='' grid='' bodies=''
-ghost_bodies=64 ghost_radius=50e-6 times='' snapshots=0
+ghost_bodies=64 ghost_radius=50e-6 times='' snapshots=0 regrid=0
 set -- "${study_extra_arguments[@]}"
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -76,6 +79,7 @@ while [ $# -gt 0 ]; do
     --ghost-radius) ghost_radius=${2:?--ghost-radius needs a value}; shift 2 ;;
     --times) times=${2:?--times needs a value}; shift 2 ;;
     --snapshots) snapshots=1; shift ;;
+    --regrid-field) regrid=1; shift ;;
     *) study_die "unknown argument '$1' (see --help)" ;;
   esac
 done
@@ -101,9 +105,14 @@ done
 common=()
 (( snapshots )) || common+=(--set output.field_interval=0.0)
 [ -n "$end_time" ] && common+=(--set "run.end_time=$end_time")
+(( regrid )) && [ -z "$grid" ] && study_die "--regrid-field needs --grid N"
 if [ -n "$grid" ]; then
-  common+=(--set "grid.nx=$grid" --set "grid.ny=$grid" --set "grid.nz=$grid"
-           --set "fluid.init_file='output/hit_box_$grid/final_field.h5'")
+  field="output/hit_box_$grid/final_field.h5"
+  if (( regrid )) && [ "$grid" != 128 ]; then
+    field="output/hit_box_128_on_$grid/final_field.h5"
+    study_field_from "$field" output/hit_box_128/final_field.h5 128
+  fi
+  common+=(--set "grid.nx=$grid" --set "grid.ny=$grid" --set "grid.nz=$grid" --set "fluid.init_file='$field'")
 fi
 counted=(); [ -n "$bodies" ] && counted+=(--set "suspension.count=$bodies")
 

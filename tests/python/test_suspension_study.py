@@ -6,7 +6,10 @@ import os
 import re
 import subprocess
 
+import h5py
+
 from conftest import REPO, run_tool
+from synthetic_fields import solenoidal_random_field, write_final_field
 
 STUDY = REPO / "tools" / "suspension-study.sh"
 MPI_AS_ROOT = {"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1"}
@@ -102,3 +105,29 @@ def test_suspension_study_runs_resumes_and_analyses(spaced_tmp, agglo):
         ("sphere-point", "2"), ("sphere-ghost", "1"), ("sphere-point", "0"), ("sphere-ghost", "0")]
     status = study("--status")
     assert status.returncode == 0 and "2 complete" in status.stdout and "1 complete" in status.stdout
+
+
+def test_suspension_study_on_the_128_field_resampled(spaced_tmp):
+    """--grid 16 --regrid-field: the batches start from the 128^3 field resampled onto 16^3
+    (tools/regrid_field.py, made at once when the 128^3 field exists, also under --slurm) instead of
+    a field converged on 16^3. A tiny synthetic base field (8^3, same box) stands in for the
+    converged 128^3 one."""
+    work, out = workdir(spaced_tmp), spaced_tmp / "regridded"
+    (work / "output" / "hit_box_128").mkdir(parents=True)
+    write_final_field(work / "output" / "hit_box_128" / "final_field.h5",
+                      solenoidal_random_field((8, 8, 8), box=(1.0e-3, 1.0e-3, 1.0e-3)))
+    command = [STUDY, "-o", out, "--grid", "16", "--regrid-field", "--shapes", "sphere", "--rungs", "point",
+               "--runs", "1", "--ghost-runs", "0"]
+    listed = run_tool(command + ["--list"], cwd=work)
+    assert ("regridded field output/hit_box_128_on_16/final_field.h5: MISSING (tools/regrid_field.py: "
+            "output/hit_box_128/final_field.h5 resampled onto 16^3, made first)") in listed.stdout
+    result = run_tool(command + ["--slurm"], cwd=work)
+    assert result.returncode == 0, result.stderr + result.stdout
+    with h5py.File(work / "output" / "hit_box_128_on_16" / "final_field.h5", "r") as handle:
+        assert list(handle["fluid/grid_shape"][()]) == [16, 16, 16]
+    assert not (work / "output" / "hit_box_16").exists()
+    assert "output/hit_box_128_on_16/final_field.h5" in (out / "sphere-point" / "batch.nml").read_text()
+    submit = (out / "submit-all.sh").read_text()
+    assert "dependency" not in submit and "sphere-point/montecarlo.sbatch" in submit
+    refused = run_tool([STUDY, "--list", "--regrid-field"], cwd=REPO)
+    assert refused.returncode == 2 and "--regrid-field needs --grid N" in refused.stderr
