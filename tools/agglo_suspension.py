@@ -13,6 +13,7 @@ go into suspension_table.csv, suspension_timeseries.csv, suspension_sizes.csv an
 Imported by agglo_stats.py (`agglo-stats --suspension`, or automatically when the runs hold
 clusters.h5).
 """
+import functools
 import json
 import math
 import os
@@ -27,6 +28,7 @@ FRACTAL_MIN_SIZE = 3
 SHAPE_ORDER = {"sphere": 0, "needle": 1, "disk": 2, "spheroid": 3, "mixed": 4}
 
 
+@functools.lru_cache(maxsize=None)
 def t_quantile(probability, dof):
     """Quantile of Student's t distribution with dof degrees of freedom (dof >= 1), by bisection
     on its CDF, 1/2 + integral_0^t f(x) dx with f(x) = Gamma((v+1)/2) / (sqrt(v pi) Gamma(v/2))
@@ -197,7 +199,8 @@ def _is_suspension_run(directory):
 
 
 def _summary_scene(directory):
-    """The summary's scene ('suspension' or None for a pair summary or none at all)."""
+    """The scene of the run's summary.json: 'suspension', 'pair' (a summary with an outcome), or
+    None (no summary, or one that names no scene)."""
     try:
         with open(os.path.join(directory, "summary.json")) as handle:
             summary = json.load(handle)
@@ -221,9 +224,22 @@ def find_suspension_runs(root):
                     for name in (CLUSTER_FILE, PARTICLE_FILE, "summary.json", "FAILED", "deck.nml"))]
 
 
+def _has_suspension_rows(directory):
+    """Whether the directory's particles.h5 holds the suspension layout (/suspension)."""
+    path = os.path.join(directory, PARTICLE_FILE)
+    if not os.path.exists(path):
+        return False
+    import h5py
+    try:
+        with h5py.File(path, "r") as h5:
+            return "suspension" in h5
+    except OSError:
+        return False
+
+
 def looks_like_suspension(roots):
-    """True when the first run found under the roots is a suspension run (clusters.h5, or a
-    summary.json whose scene is 'suspension')."""
+    """True when the first run found under the roots is a suspension run (clusters.h5, a
+    summary.json whose scene is 'suspension', or particles.h5 in the suspension layout)."""
     for root in roots:
         try:
             directories = find_suspension_runs(root)
@@ -234,6 +250,8 @@ def looks_like_suspension(roots):
                 return True
             if os.path.exists(os.path.join(directory, "summary.json")):
                 return False
+            if _has_suspension_rows(directory):
+                return True
     return False
 
 

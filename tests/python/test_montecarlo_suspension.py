@@ -3,6 +3,7 @@ input/suspension_sphere_none.nml (no fluid) shortened to 1 ms, in directories wi
 suspension run has no pair outcome; the batch writes its summary.json, resumes, reports its status,
 runs Slurm tasks and feeds agglo-stats' suspension mode."""
 import json
+import math
 import os
 import subprocess
 
@@ -83,3 +84,22 @@ def test_suspension_slurm_task_writes_the_summary(agglo, spaced_tmp):
     assert s["scene"] == "suspension" and s["seed"] == 12 and isinstance(s["wall_time"], (int, float))
     again = montecarlo(agglo, "2", "11", root, "--slurm")
     assert again.returncode == 0 and "#SBATCH --array=1" in script.read_text().splitlines()
+
+
+def test_ghost_collision_kernel_of_the_vacuum_suspension_is_the_kinetic_one(agglo, spaced_tmp):
+    """Ghost spheres in vacuum keep their Maxwellian start velocities (each component normal with
+    sigma = velocity_rms, docs/theory.md "Suspension placement"; ghosts pass through each other),
+    so their collision kernel is the hard-sphere gas's (Chapman & Cowling 1970, ch. 5):
+    Z / (n^2/2) = pi d^2 <|v_rel|>, <|v_rel|> = sqrt(2) sqrt(8/pi) sigma = 4 sigma / sqrt(pi).
+    d = 100 um, sigma = 10 mm/s: 7.09e-10 m^3/s. Four runs of 20 ms (about 250 encounters, a
+    Poisson error of 6%), the kernel from agglo-stats' suspension mode."""
+    root = spaced_tmp / "ghost batch"
+    result = run_tool([MONTECARLO, "--deck", DECK, "--runs", "4", "--seed", "1", "--out", root, "--agglo", agglo,
+                       "-j", "2", "--set", "suspension.ghost=.true."], cwd=REPO)
+    assert result.returncode == 0, result.stdout + result.stderr
+    stats = run_tool([AGGLO_STATS, root, "-o", spaced_tmp / "stats", "--no-figures"])
+    assert stats.returncode == 0, stats.stderr + stats.stdout
+    kernel = json.loads((spaced_tmp / "stats" / "suspension.json").read_text())["groups"]["sphere"]["collision_kernel"]
+    theory = math.pi * (100e-6) ** 2 * 4.0 * 0.01 / math.sqrt(math.pi)
+    assert kernel["low"] < theory < kernel["high"], (kernel, theory)
+    assert abs(kernel["mean"] / theory - 1.0) < 0.2, (kernel, theory)
