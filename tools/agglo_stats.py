@@ -9,6 +9,8 @@ Outcomes (docs/theory.md, "Run outcome"): agglomerated (bound), rebounded, appro
 range without touching, then escaped) and no_contact; every class but agglomerated counts as not
 agglomerated. Summaries written before 'approached', contact_episodes and ended_in_flight existed
 are read as they are (no run of theirs is 'approached'; episodes from particles.h5).
+Suspension runs (clusters.h5; `--suspension`, or found by their files) are read by
+agglo_suspension.py instead: cluster statistics per shape (docs/tools.md, "Suspension runs").
 Run it through the launcher tools/agglo-stats (it picks the repository's .venv).
 """
 import argparse
@@ -890,7 +892,9 @@ def parse_arguments(argv):
                     "and the agglomeration rate (agglomerated / runs) with its Wilson score 95% "
                     "interval; writes runs.csv, rates.csv and the figures (PNG and PDF).",
         epilog="Runs without summary.json (incomplete) or with a FAILED marker are skipped and "
-               "counted. Exit status: 0 done, 1 no usable run or unreadable input, 2 usage.")
+               "counted. Suspension runs (clusters.h5) get the cluster statistics instead (their options "
+               "above; docs/tools.md, 'Suspension runs'). "
+               "Exit status: 0 done, 1 no usable run or unreadable input, 2 usage.")
     parser.add_argument("roots", nargs="+", metavar="BATCH",
                         help="batch output root (or a single run directory); several are merged")
     parser.add_argument("-o", "--out", metavar="DIR",
@@ -906,12 +910,50 @@ def parse_arguments(argv):
                              "collisions, carried together by the flow, edge-on bounce): "
                              "illustrative.csv and the figure illustrative_histories")
     parser.add_argument("--no-figures", action="store_true", help="only the table and CSV files")
+    suspension = parser.add_argument_group(
+        "suspension runs", "runs of &scene particles = 'suspension' (clusters.h5 and particles.h5; "
+        "chosen automatically when the runs hold clusters.h5): cluster statistics per shape "
+        "(--group-by shape, the default for them) or per batch (--group-by batch)")
+    suspension.add_argument("--suspension", action="store_true",
+                            help="read the batches as suspension runs (cluster statistics)")
+    suspension.add_argument("--times", type=_times, metavar="T1,T2,...",
+                            help="simulated times (s) of the cluster-size distributions, e.g. 1e-3,3e-3 "
+                                 "(each the nearest output row; default: the last row)")
+    suspension.add_argument("--snapshot-time", type=float, metavar="T",
+                            help="simulated time (s) of the 3D snapshot coloured by cluster (default: the "
+                                 "last particles.h5 row)")
+    suspension.add_argument("--rg", choices=("full", "centres"), default="full",
+                            help="radius of gyration of the fractal fit: 'full' (each body's own "
+                                 "gyration included, the default) or 'centres' (the centres alone)")
+    suspension.add_argument("--compare", metavar="RUNG_A,RUNG_B",
+                            help="with --group-by batch and batches named SHAPE-RUNG: the two rungs "
+                                 "side by side per shape (suspension_comparison.csv), e.g. point,resolved")
     return parser.parse_args(argv)
+
+
+def _times(text):
+    """--times: comma-separated non-negative simulated times (s)."""
+    try:
+        values = [float(value) for value in text.split(",") if value.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is not a comma-separated list of times (s)")
+    if not values or any(not math.isfinite(v) or v < 0 for v in values):
+        raise argparse.ArgumentTypeError(f"'{text}': times must be finite and >= 0 (s)")
+    return values
 
 
 def main(argv=None):
     arguments = parse_arguments(sys.argv[1:] if argv is None else argv)
+    import agglo_suspension
+    # Run as a script this module is __main__, and agglo_suspension imports it again as agglo_stats:
+    # its BatchError is then another class.
+    batch_errors = (BatchError, agglo_suspension.BatchError)
     try:
+        if arguments.suspension or agglo_suspension.looks_like_suspension(arguments.roots):
+            return agglo_suspension.main(arguments)
+        if arguments.compare or arguments.times or arguments.snapshot_time is not None:
+            raise BatchError("--times, --snapshot-time and --compare are options of suspension runs "
+                             "(clusters.h5); these batches are pair scenes")
         runs, skipped = load_runs(arguments.roots)
         groups = assign_groups(runs, arguments.group_by)
         rows = rate_table(runs, groups)
@@ -946,7 +988,7 @@ def main(argv=None):
             for note in notes:
                 print(note)
             print(f"wrote {len(written)} figure files in {out}")
-    except BatchError as error:
+    except batch_errors as error:
         sys.stderr.write(f"agglo-stats: error: {error}\n")
         return 1
     except (OSError, KeyError) as error:

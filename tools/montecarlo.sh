@@ -50,6 +50,12 @@ skipped; incomplete, failed or interrupted runs start again from scratch (overwr
 The root keeps the batch's base deck (ROOT/batch.nml, with the --set values applied) and base seed
 (ROOT/batch.conf); a call with a different base deck or seed for the same root is refused.
 
+Suspension decks (&scene particles = 'suspension') are run the same way. The code writes no
+summary.json for them (there is no pair outcome): when such a run exits 0 with its particles.h5,
+this script writes its summary.json ("scene": "suspension", "complete": true, name, seed, the
+deck's end_time, wall_time in seconds, whether clusters.h5 exists), so that a run is complete,
+here and for the study and statistics tools alike, when its summary.json says so.
+
 A run failed when the executable exits non-zero, or exits 0 without writing summary.json. Its
 directory then holds FAILED (the reason) next to stdout.log (everything the run printed) and the
 code's agglo.log; ROOT/failed.txt lists the failed runs of the last call. Runs start in the current
@@ -79,9 +85,15 @@ fortran_string() { # text -> a Fortran string literal ('' doubles a quote)
 # ---------------------------------------------------------------------------------------------
 # One run's result (also copied verbatim into the Slurm script, so both paths judge alike).
 # ---------------------------------------------------------------------------------------------
-record_run_result() { # run directory, exit status -> 0 complete, 1 failed (FAILED written)
+record_run_result() { # run directory, exit status[, wall seconds] -> 0 complete, 1 failed (FAILED written)
   local dir=$1 status=$2 reason=''
-  if [[ $status -eq 124 ]]; then reason="stopped at the time limit (exit status 124)"
+  # A suspension run ends without summary.json (it has no pair outcome): its summary is written here.
+  if [[ $status -eq 0 && ! -f $dir/summary.json ]] && is_suspension_deck "$dir/deck.nml"; then
+    if [[ -f $dir/particles.h5 ]]; then write_suspension_summary "$dir" "${3:-}"
+    else reason="exited 0 but wrote no particles.h5 (a suspension run)"; fi
+  fi
+  if [[ -n $reason ]]; then :
+  elif [[ $status -eq 124 ]]; then reason="stopped at the time limit (exit status 124)"
   elif [[ $status -ne 0 ]]; then reason="exit status $status"
   elif [[ ! -f $dir/summary.json ]]; then reason="exited 0 but wrote no summary.json"
   fi
@@ -93,7 +105,29 @@ record_run_result() { # run directory, exit status -> 0 complete, 1 failed (FAIL
   return 1
 }
 
-run_is_complete() { [[ -f $1/summary.json && ! -e $1/FAILED ]]; }
+# A complete run has summary.json (the code's, or write_suspension_summary's) that does not say
+# "complete": false, and no FAILED marker.
+run_is_complete() { [[ -f $1/summary.json && ! -e $1/FAILED ]] && ! grep -Eq '"complete"[[:space:]]*:[[:space:]]*false' "$1/summary.json"; }
+
+deck_value() { # deck file, variable -> its value as written (the last assignment wins, as in a namelist)
+  sed -e 's/!.*//' "$1" 2>/dev/null | tr ',' '\n' | \
+    sed -n -E "s/^[[:space:]&a-zA-Z_]*[[:space:]]?(^|[[:space:]])$2[[:space:]]*=[[:space:]]*//Ip" | tail -n 1 | \
+    sed -E "s/[[:space:]]*\/?[[:space:]]*$//; s/^['\"]//; s/['\"]$//"
+}
+
+is_suspension_deck() { [[ -f $1 && $(deck_value "$1" particles) == [Ss][Uu][Ss][Pp][Ee][Nn][Ss][Ii][Oo][Nn] ]]; }
+
+write_suspension_summary() { # run directory[, wall seconds]: the run's summary.json (atomically)
+  local dir=$1 wall=${2:-} name seed end
+  name=$(deck_value "$dir/deck.nml" name); seed=$(deck_value "$dir/deck.nml" seed)
+  end=$(deck_value "$dir/deck.nml" end_time); end=${end//[dD]/e}
+  end=$(printf '%.17g' "$end" 2>/dev/null) || end=null
+  [[ $seed =~ ^-?[0-9]+$ ]] || seed=null
+  [[ $wall =~ ^[0-9]+(\.[0-9]+)?$ ]] || wall=null
+  printf '{\n  "scene": "suspension",\n  "complete": true,\n  "name": "%s",\n  "seed": %s,\n  "end_time": %s,\n  "wall_time": %s,\n  "clusters": %s,\n  "written_by": "tools/montecarlo.sh"\n}\n' \
+    "${name//[\"\\]/_}" "$seed" "$end" "$wall" "$([[ -f $dir/clusters.h5 ]] && echo true || echo false)" \
+    > "$dir/summary.json.tmp" && mv -f "$dir/summary.json.tmp" "$dir/summary.json"
+}
 
 now_ms() { local t=${EPOCHREALTIME/[.,]/}; printf '%s' $((10#$t / 1000)); }   # wall clock, milliseconds
 
@@ -293,15 +327,17 @@ if (( slurm )); then
     printf 'root=%q\nagglo=%q\nworkdir=%q\n' "$root" "$agglo" "$workdir"
     printf 'launcher=(%s)\n' "$(printf '%q ' "${launcher_words[@]}")"
     printf 'ranks=%s\n' "$ranks"
-    declare -f record_run_result run_is_complete
+    declare -f record_run_result run_is_complete deck_value is_suspension_deck write_suspension_summary
     cat <<'EOF'
 index=${SLURM_ARRAY_TASK_ID:?submit this script with sbatch: it is a job array}
 dir=$(printf '%s/run_%04d' "$root" "$index")
 if run_is_complete "$dir"; then exit 0; fi
 cd "$workdir" || exit 1
 rm -f "$dir/FAILED" "$dir/summary.json" "$dir/summary.json.rejected"
+start=$SECONDS
 "${launcher[@]}" -n "$ranks" "$agglo" "$dir/deck.nml" > "$dir/stdout.log" 2>&1 < /dev/null
-record_run_result "$dir" $?
+status=$?
+record_run_result "$dir" $status $((SECONDS - start))
 EOF
   } > "$script.tmp" && mv -f "$script.tmp" "$script" || die "cannot write '$script'"
   chmod +x "$script"
@@ -375,7 +411,7 @@ while (( next < total || ${#running_run[@]} > 0 )); do
   i=${running_run[$finished_pid]}; unset "running_run[$finished_pid]"
   dir="$root/$(run_name "$i")"
   run_ms=$(($(now_ms) - start_time[$i])); busy_ms=$((busy_ms + run_ms))
-  if record_run_result "$dir" "$status"; then
+  if record_run_result "$dir" "$status" "$((run_ms / 1000)).$(printf '%03d' $((run_ms % 1000)))"; then
     done_ok=$((done_ok + 1))
     progress "$(run_name "$i") complete ($(format_seconds "$run_ms"))"
   else

@@ -1,7 +1,7 @@
 # study_lib.sh: what the study scripts (tools/chaotic-study.sh, tools/quiescent-resolved-study.sh,
-# tools/speed-accuracy-study.sh) share: their common options, one Monte-Carlo batch per call of
-# study_batch (local, --status or --slurm), the converged forced fields they start from, and the
-# record of every batch's wall time. Sourced, never run; docs/tools.md ("Study scripts") explains it.
+# tools/speed-accuracy-study.sh, tools/suspension-study.sh) share: their common options, one
+# Monte-Carlo batch per call of study_batch (local, --status or --slurm), the converged forced
+# fields they start from, and the record of every batch's wall time. Sourced, never run; docs/tools.md ("Study scripts") explains it.
 # The caller sets study_name and defines study_usage_specific (its own part of --help) before
 # sourcing, then calls study_parse_arguments "$@", declares its batches and calls study_finish.
 
@@ -42,8 +42,8 @@ Common options:
                            them again; repeatable; --no-reuse drops the study's default
       --no-analysis        skip the statistics and figures at the end
       --publish            after the analysis, copy its figures (PNG) and small tables (rates,
-                           means, illustrative runs, comparisons, costs; not runs.csv) into
-                           docs/figures/<study>/ (or $AGGLO_STUDY_PUBLISH_DIR) as
+                           means, illustrative runs, suspension tables, comparisons, costs; not
+                           runs.csv) into docs/figures/<study>/ (or $AGGLO_STUDY_PUBLISH_DIR) as
                            <stats directory>_<file>, the output root removed from paths inside
   -h, --help               this text
 
@@ -393,6 +393,7 @@ study_publish_results() {
   local target="${AGGLO_STUDY_PUBLISH_DIR:-$study_repo/docs/figures/$study_name}" file name directory
   mkdir -p "$target" || { study_status_all=1; return; }
   for file in "$study_out"/stats-*/*.png "$study_out"/stats-*/{rates,history_means,illustrative}.csv \
+              "$study_out"/stats-*/suspension_{table,comparison}.csv \
               "$study_out"/analysis/*.png "$study_out"/analysis/{comparison.csv,speed_accuracy.md} \
               "$study_out"/{comparison.csv,batch_costs.tsv,batch_times.tsv} "$study_out"/transitions-*.csv; do
     [ -f "$file" ] || continue
