@@ -82,6 +82,19 @@ if [[ $parts == *immersed* ]]; then
     (cd "$work" && mpirun -np 1 "$immersed_exe" 64 20 $bodies implicit cpu -1 sphere)
     (cd "$work" && mpirun -np 2 "$immersed_exe" 64 20 $bodies implicit wall -1 sphere)
   done
+  # The cost per body at 128^3: N needles, disks and spheres of the paper's size (D/dx about 13) on a
+  # lattice, each run's immersed boundary (coupled less fluid-only step) per body, and the exponent p
+  # of a least-squares fit cost ~ N^p over N (CPU time of the slowest rank, also on 2 ranks).
+  echo "Cost per body (128^3, mixed shapes; IB = coupled - fluid, ms per step; last columns: IB, IB per body):"
+  for ranks in 1 2; do
+    for bodies in 1 4 16 64 128; do
+      (cd "$work" && mpirun -np $ranks "$immersed_exe" 128 10 $bodies implicit cpu -1 mixed) | head -n 1 \
+        | awk '{ ib = $6 - $5; printf "%s  %8.2f %7.3f\n", $0, ib, ib / $3 }'
+    done | tee "$work/per_body_$ranks.txt"
+    awk -v r=$ranks '{ x = log($3); y = log($(NF - 1)); n++; sx += x; sy += y; sxx += x * x; sxy += x * y }
+      END { printf "  %d rank(s): IB cost ~ N^%.2f (least squares over N = 1..128)\n", r, (n * sxy - sx * sy) / (n * sxx - sx * sx) }' \
+      "$work/per_body_$ranks.txt"
+  done
   for level in 1 2 3; do   # the ghost nodes on the icosphere (&bodies geometry = 'mesh')
     (cd "$work" && mpirun -np 1 "$immersed_exe" 128 10 2 implicit cpu $level)
   done

@@ -50,6 +50,11 @@ module immersed_boundary
     !> in the flattened below | above planes of the component (above after below), 0 G itself
     integer, allocatable :: source(:, :)
     real(wp), allocatable :: weight(:, :)       !< (8, n_ghost) trilinear weights, as in the records
+    !> (8, n_ghost) the stencil values, gathered by the sweeps: all of them at an imposition's first
+    !> sweep, then only the corners at ghost nodes (the others keep their values through the sweeps)
+    real(wp), allocatable :: values(:, :)
+    integer :: n_moving = 0                     !< the corners at ghost nodes
+    integer, allocatable :: moving(:, :)        !< (2, n_moving) corner and row of each
     real(wp), allocatable :: kappa(:)           !< (n_ghost) the records' extrapolation
     real(wp), allocatable :: self_weight(:)     !< (n_ghost) the weight of G's own corner (0 if none)
   end type ghost_rows_t
