@@ -64,7 +64,8 @@ fi
 # Immersed bodies in prescribed motion (the paper's needle and disk, moving and rotating: reclassified
 # every step; explicit diffusion): the coupled step against the fluid-only step (target <= 1.3x,
 # docs/studies/performance.md), by part, for both couplings, 1 and 2 ranks; then against the number of
-# bodies (needles and disks at 128^3; spheres of D/dx = 10 at 64^3) and against the mesh level of the
+# bodies (needles and disks at 128^3; spheres of D/dx = 10 at 64^3; N = 1..128 needles, disks and spheres
+# at 128^3 with the immersed boundary per body and the exponent of its fit) and against the mesh level of the
 # ghost-node geometry. Medians over 10 (128^3) or 20 (64^3) repetitions, slowest rank; on 1 rank the process's
 # CPU time (robust on a shared machine), on 2 ranks the wall time.
 if [[ $parts == *immersed* ]]; then
