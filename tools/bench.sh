@@ -64,7 +64,8 @@ fi
 # Immersed bodies in prescribed motion (the paper's needle and disk, moving and rotating: reclassified
 # every step; explicit diffusion): the coupled step against the fluid-only step (target <= 1.3x,
 # docs/studies/performance.md), by part, for both couplings, 1 and 2 ranks; then against the number of
-# bodies (needles and disks at 128^3; spheres of D/dx = 10 at 64^3) and against the mesh level of the
+# bodies (needles and disks at 128^3; spheres of D/dx = 10 at 64^3; N = 1..128 needles, disks and spheres
+# at 128^3 with the immersed boundary per body and the exponent of its fit) and against the mesh level of the
 # ghost-node geometry. Medians over 10 (128^3) or 20 (64^3) repetitions, slowest rank; on 1 rank the process's
 # CPU time (robust on a shared machine), on 2 ranks the wall time.
 if [[ $parts == *immersed* ]]; then
@@ -81,6 +82,19 @@ if [[ $parts == *immersed* ]]; then
   for bodies in 1 4 16; do   # spheres of D/dx = 10 on a lattice at 64^3 (the cost per body)
     (cd "$work" && mpirun -np 1 "$immersed_exe" 64 20 $bodies implicit cpu -1 sphere)
     (cd "$work" && mpirun -np 2 "$immersed_exe" 64 20 $bodies implicit wall -1 sphere)
+  done
+  # The cost per body at 128^3: N needles, disks and spheres of the paper's size (D/dx about 13) on a
+  # lattice, each run's immersed boundary (coupled less fluid-only step) per body, and the exponent p
+  # of a least-squares fit cost ~ N^p over N (CPU time of the slowest rank, also on 2 ranks).
+  echo "Cost per body (128^3, mixed shapes; IB = coupled - fluid, ms per step; last columns: IB, IB per body):"
+  for ranks in 1 2; do
+    for bodies in 1 4 16 64 128; do
+      (cd "$work" && mpirun -np $ranks "$immersed_exe" 128 10 $bodies implicit cpu -1 mixed) | head -n 1 \
+        | awk '{ ib = $6 - $5; printf "%s  %8.2f %7.3f\n", $0, ib, ib / $3 }'
+    done | tee "$work/per_body_$ranks.txt"
+    awk -v r=$ranks '{ x = log($3); y = log($(NF - 1)); n++; sx += x; sy += y; sxx += x * x; sxy += x * y }
+      END { printf "  %d rank(s): IB cost ~ N^%.2f (least squares over N = 1..128)\n", r, (n * sxy - sx * sy) / (n * sxx - sx * sx) }' \
+      "$work/per_body_$ranks.txt"
   done
   for level in 1 2 3; do   # the ghost nodes on the icosphere (&bodies geometry = 'mesh')
     (cd "$work" && mpirun -np 1 "$immersed_exe" 128 10 2 implicit cpu $level)

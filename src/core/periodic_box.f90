@@ -21,6 +21,14 @@ contains
   elemental function minimum_image(separation, period) result(image)
     real(wp), intent(in) :: separation, period
     real(wp) :: image
+    ! Within half a period (most calls) anint gives +-0, so the shift is a zero: the sum below is the
+    ! general formula's value, bit for bit (signed zeros included), without the rounding call.
+    if (period > 0.0_wp) then
+      if (abs(separation / period) < 0.5_wp) then
+        image = separation + 0.0_wp
+        return
+      end if
+    end if
     image = separation + image_shift(separation, period)
   end function minimum_image
 

@@ -23,7 +23,7 @@ module immersed_boundary
   use immersed_ghost_exchange, only: ghost_planes_t
   implicit none
   private
-  public :: immersed_boundary_t, ibm_settings_t, imposition_report_t, status_change_report_t
+  public :: immersed_boundary_t, ibm_settings_t, imposition_report_t, status_change_report_t, ghost_rows_t
 
   !> The rigid velocity at a node and the velocity a ghost row is built on (u_B, or the saturated
   !> Couette value): for the imposition and for a solver that imposes the body rows itself
@@ -38,6 +38,26 @@ module immersed_boundary
     !> (3, n_ghost), at the other body's surface point B' of a saturated row, from that body's centre (else 0)
     real(wp), allocatable :: opposite(:, :)
   end type lever_arms_t
+
+  !> The ghost rows of one component packed for the Jacobi sweeps (immersed_imposition): the fields
+  !> of the ghost records a sweep reads (a quarter of a record's bytes), with the stencil's nodes as
+  !> positions in the flattened field or in the copied planes, so that a sweep streams through a
+  !> short array rather than the whole records. Packed from the records of one classification.
+  type :: ghost_rows_t
+    integer :: packed_from = -1                 !< geometry%classifications of the records it holds
+    integer, allocatable :: node(:)             !< (n_ghost) position of G in the flattened field
+    !> (8, n_ghost) each stencil corner: > 0 position in the flattened field, < 0 minus the position
+    !> in the flattened below | above planes of the component (above after below), 0 G itself
+    integer, allocatable :: source(:, :)
+    real(wp), allocatable :: weight(:, :)       !< (8, n_ghost) trilinear weights, as in the records
+    !> (8, n_ghost) the stencil values, gathered by the sweeps: all of them at an imposition's first
+    !> sweep, then only the corners at ghost nodes (the others keep their values through the sweeps)
+    real(wp), allocatable :: values(:, :)
+    integer :: n_moving = 0                     !< the corners at ghost nodes
+    integer, allocatable :: moving(:, :)        !< (2, n_moving) corner and row of each
+    real(wp), allocatable :: kappa(:)           !< (n_ghost) the records' extrapolation
+    real(wp), allocatable :: self_weight(:)     !< (n_ghost) the weight of G's own corner (0 if none)
+  end type ghost_rows_t
 
   !> What the deck decides about the imposition.
   type :: ibm_settings_t
@@ -91,6 +111,7 @@ module immersed_boundary
     real(wp), allocatable :: inertia_change(:, :)
     type(ghost_planes_t) :: planes       !< the neighbours' planes the stencils read, and the sweeps' traffic
     type(lever_arms_t) :: arms(3)        !< per component, for the current placement
+    type(ghost_rows_t) :: rows(3)        !< per component, the ghost rows packed for the sweeps
     real(wp), allocatable :: arm_centres(:, :)   !< (3, n) the centres the lever arms were computed for
     type(status_change_report_t) :: changes      !< status changes and load jumps (moving bodies)
     real(wp), allocatable :: force_history(:, :, :)   !< (3, n, 2) N, the forces of the last two steps

@@ -72,6 +72,9 @@ module immersed_geometry
     integer :: n_bodies = 0
     type(component_nodes_t) :: component(3)
     type(classification_work_t) :: work                 !< reused by every classification
+    !> classifications so far: what is derived from the records (the packed ghost rows of the
+    !> imposition) is stale when it was derived at another count; code that edits records by hand counts too
+    integer :: classifications = 0
   end type immersed_geometry_t
 
 contains
@@ -99,6 +102,7 @@ contains
     integer :: component
     call check_inputs(grid, bodies, options)
     geometry%n_bodies = size(bodies)
+    geometry%classifications = geometry%classifications + 1
     do component = 1, 3
       call classify_component(grid, bodies, options, component, geometry%work, geometry%component(component))
     end do
@@ -222,14 +226,18 @@ contains
 
       ! Lists of this rank's ghost and interior nodes, in storage order (k, then j, then i).
       nodes%component = component
+      ! The lists keep their storage while it holds the new counts (n_ghost, n_interior say how much
+      ! is in use): a moving body changes its counts by a few nodes a step, and a new list of ghost
+      ! records (each initialised) every step cost as much as a tenth of the classification.
       if (allocated(nodes%ghost)) then
-        if (size(nodes%ghost) /= n_ghost) deallocate(nodes%ghost)
+        if (size(nodes%ghost) < n_ghost) deallocate(nodes%ghost)
       end if
       if (allocated(nodes%interior)) then
-        if (size(nodes%interior, 2) /= n_interior) deallocate(nodes%interior, nodes%interior_body)
+        if (size(nodes%interior, 2) < n_interior) deallocate(nodes%interior, nodes%interior_body)
       end if
-      if (.not. allocated(nodes%ghost)) allocate(nodes%ghost(n_ghost))
-      if (.not. allocated(nodes%interior)) allocate(nodes%interior(3, n_interior), nodes%interior_body(n_interior))
+      if (.not. allocated(nodes%ghost)) allocate(nodes%ghost(n_ghost + n_ghost / 8))
+      if (.not. allocated(nodes%interior)) allocate(nodes%interior(3, n_interior + n_interior / 8), &
+                                                    nodes%interior_body(n_interior + n_interior / 8))
       nodes%n_ghost = 0
       nodes%n_interior = 0
       if (options%band) then

@@ -20,8 +20,9 @@ module immersed_imposition
   use fluid_grid, only: fluid_grid_t
   use halo_exchange, only: exchange_slab_halos
   use immersed_ghost_exchange, only: exchange_planes, plan_ghost_traffic, gather_sweep_result
-  use immersed_boundary, only: immersed_boundary_t, imposition_report_t, rigid_velocity, ghost_surface_value
+  use immersed_boundary, only: immersed_boundary_t, imposition_report_t, ghost_rows_t, rigid_velocity, ghost_surface_value
   use immersed_loads, only: account
+  use immersed_geometry, only: node_ghost
   implicit none
   private
   public :: ibm_impose
@@ -42,6 +43,9 @@ contains
     integer :: c, sweep, max_sweeps, n_max
     character(len=240) :: text
 
+    do c = 1, 3
+      if (ibm%rows(c)%packed_from /= ibm%geometry%classifications) call pack_rows(ibm, grid, c)
+    end do
     n_max = max(1, maxval([(ibm%geometry%component(c)%n_ghost, c = 1, 3)]))
     allocate(before(n_max, 3), surface(n_max, 3))
     change = 0
@@ -102,9 +106,9 @@ contains
     !> One Jacobi sweep of the three components' ghost rows on this rank (limit: the largest change).
     subroutine sweep_once()
       limit = 0
-      call jacobi_sweep(ibm, 1, u, surface(:, 1), limit)
-      call jacobi_sweep(ibm, 2, v, surface(:, 2), limit)
-      call jacobi_sweep(ibm, 3, w, surface(:, 3), limit)
+      call jacobi_sweep(ibm, 1, u, surface(:, 1), sweep == 0, limit)
+      call jacobi_sweep(ibm, 2, v, surface(:, 2), sweep == 0, limit)
+      call jacobi_sweep(ibm, 3, w, surface(:, 3), sweep == 0, limit)
       sweep = sweep + 1
     end subroutine sweep_once
 
@@ -179,60 +183,149 @@ contains
     end associate
   end subroutine surface_velocities
 
-  !> One Jacobi sweep of the ghost rows of one component: every new value from the values before
-  !> the sweep; `limit` takes the largest change.
-  subroutine jacobi_sweep(ibm, component, field, surface, limit)
-    type(immersed_boundary_t), intent(in) :: ibm
+  !> Pack the ghost rows of one component for the sweeps (ghost_rows_t, immersed_boundary) from
+  !> the records of the current classification.
+  subroutine pack_rows(ibm, grid, component)
+    type(immersed_boundary_t), intent(inout) :: ibm
+    type(fluid_grid_t), intent(in) :: grid
     integer, intent(in) :: component
-    real(wp), intent(inout) :: field(0:, 0:, 0:)
-    real(wp), intent(in) :: surface(:)
-    real(wp), intent(inout) :: limit
-    real(wp), allocatable :: updated(:)
-    real(wp) :: kappa, self_weight, neighbours
-    integer :: g, corner, k
-    associate (nodes => ibm%geometry%component(component))
-      allocate(updated(nodes%n_ghost))
-      do g = 1, nodes%n_ghost
+    integer :: g, corner, k, n_ghost, stride_j, stride_k, plane_size, k_low
+    associate (nodes => ibm%geometry%component(component), rows => ibm%rows(component))
+      n_ghost = nodes%n_ghost
+      if (allocated(rows%node)) then
+        if (size(rows%node) < n_ghost) deallocate(rows%node, rows%source, rows%weight, rows%values, rows%kappa, &
+                                                  rows%self_weight, rows%moving)
+      end if
+      if (.not. allocated(rows%node)) allocate(rows%node(size(nodes%ghost)), rows%source(8, size(nodes%ghost)), &
+          rows%weight(8, size(nodes%ghost)), rows%values(8, size(nodes%ghost)), rows%kappa(size(nodes%ghost)), &
+          rows%self_weight(size(nodes%ghost)), rows%moving(2, 8 * size(nodes%ghost)))
+      rows%n_moving = 0
+      ! The field's layout (0:nx+1, 0:ny+1, 0:nz_local+1) and the planes' (0:nx+1, 0:ny+1, halo planes).
+      stride_j = grid%nx + 2
+      stride_k = stride_j * (grid%ny + 2)
+      plane_size = 0
+      k_low = 0
+      if (allocated(ibm%planes%below)) then
+        plane_size = size(ibm%planes%below(:, :, :, component))
+        k_low = lbound(ibm%planes%below, 3)
+      end if
+      do g = 1, n_ghost
         associate (ghost => nodes%ghost(g))
-          kappa = ghost%extrapolation
-          neighbours = 0
-          self_weight = 0
+          rows%node(g) = flat(ghost%node(1), ghost%node(2), ghost%node(3))
+          rows%kappa(g) = ghost%extrapolation
+          rows%self_weight(g) = 0
           do corner = 1, 8
+            rows%weight(corner, g) = ghost%weight(corner)
             if (corner == ghost%self_corner) then
-              self_weight = ghost%weight(corner)
+              rows%self_weight(g) = ghost%weight(corner)
+              rows%source(corner, g) = 0
               cycle
+            end if
+            ! A ghost node (of this rank or, in the copied planes, of a neighbour) changes in the sweeps.
+            if (ghost%stencil_status(corner) == node_ghost) then
+              rows%n_moving = rows%n_moving + 1
+              rows%moving(:, rows%n_moving) = [corner, g]
             end if
             ! The corner's local plane, continued beyond the slab (lower corner + bit).
             k = ghost%node(3) + ghost%lower_offset(3) + (corner - 1) / 4
-            neighbours = neighbours + ghost%weight(corner) * &
-                         plane_value(ibm, component, field, ghost%stencil(1, corner), ghost%stencil(2, corner), k)
+            if (k < 1) then
+              rows%source(corner, g) = -(flat(ghost%stencil(1, corner), ghost%stencil(2, corner), k - k_low))
+            else if (k > grid%nz_local) then
+              rows%source(corner, g) = -(plane_size + flat(ghost%stencil(1, corner), ghost%stencil(2, corner), &
+                                                           k - grid%nz_local - 1))
+            else
+              rows%source(corner, g) = flat(ghost%stencil(1, corner), ghost%stencil(2, corner), k)
+            end if
           end do
-          updated(g) = ((1.0_wp + kappa) * surface(g) - kappa * neighbours) / (1.0_wp + kappa * self_weight)
         end associate
       end do
-      do g = 1, nodes%n_ghost
-        associate (node => nodes%ghost(g)%node)
-          limit = max(limit, abs(updated(g) - field(node(1), node(2), node(3))))
-          field(node(1), node(2), node(3)) = updated(g)
-        end associate
-      end do
+      rows%packed_from = ibm%geometry%classifications
     end associate
+  contains
+    !> Position of (i, j, k) in an array of layout (0:nx+1, 0:ny+1, 0:) flattened.
+    pure integer function flat(i, j, k)
+      integer, intent(in) :: i, j, k
+      flat = 1 + i + stride_j * j + stride_k * k
+    end function flat
+  end subroutine pack_rows
+
+  !> One Jacobi sweep of the ghost rows of one component: every new value from the values before
+  !> the sweep; `limit` takes the largest change. The first sweep of an imposition reads every
+  !> stencil value; the later ones only those at ghost nodes (the rest do not change in the sweeps).
+  subroutine jacobi_sweep(ibm, component, field, surface, first, limit)
+    type(immersed_boundary_t), intent(inout) :: ibm
+    integer, intent(in) :: component
+    real(wp), intent(inout) :: field(0:, 0:, 0:)
+    real(wp), intent(in) :: surface(:)
+    logical, intent(in) :: first
+    real(wp), intent(inout) :: limit
+    real(wp) :: no_planes(0)
+    if (ibm%geometry%component(component)%n_ghost == 0) return
+    if (allocated(ibm%planes%below)) then
+      call sweep_rows(ibm%rows(component), ibm%geometry%component(component)%n_ghost, field, &
+                      ibm%planes%below(:, :, :, component), ibm%planes%above(:, :, :, component), &
+                      size(ibm%planes%below(:, :, :, component)), surface, first, limit)
+    else   ! no copied planes (then no stencil leaves the slab)
+      call sweep_rows(ibm%rows(component), ibm%geometry%component(component)%n_ghost, field, no_planes, no_planes, &
+                      0, surface, first, limit)
+    end if
   end subroutine jacobi_sweep
 
-  !> Value at i, j (global) and local plane k, which may lie beyond the slab (copied planes).
-  pure real(wp) function plane_value(ibm, component, field, i, j, k) result(value)
-    type(immersed_boundary_t), intent(in) :: ibm
-    integer, intent(in) :: component
-    real(wp), intent(in) :: field(0:, 0:, 0:)
-    integer, intent(in) :: i, j, k
-    if (k < 1) then
-      value = ibm%planes%below(i, j, k, component)
-    else if (k > ubound(field, 3) - 1) then
-      value = ibm%planes%above(i, j, k, component)
+  !> The sweep of jacobi_sweep on the packed rows, with the field and the component's copied planes
+  !> seen flattened (the layouts of pack_rows): the stencil values are gathered into rows%values
+  !> (all of them when `first`, else those at ghost nodes), then each row is evaluated from them in
+  !> the order of its corners, as from the field.
+  subroutine sweep_rows(rows, n_ghost, field, below, above, plane_size, surface, first, limit)
+    type(ghost_rows_t), intent(inout) :: rows
+    integer, intent(in) :: n_ghost, plane_size   !< plane_size: the values in below (and in above)
+    real(wp), intent(inout) :: field(*)
+    real(wp), intent(in) :: below(*), above(*)
+    real(wp), intent(in) :: surface(:)
+    logical, intent(in) :: first
+    real(wp), intent(inout) :: limit
+    real(wp), allocatable :: updated(:)
+    real(wp) :: neighbours
+    integer :: g, corner, m
+    allocate(updated(n_ghost))
+    if (first) then
+      do g = 1, n_ghost
+        do corner = 1, 8
+          if (rows%source(corner, g) /= 0) rows%values(corner, g) = source_value(rows%source(corner, g))
+        end do
+      end do
     else
-      value = field(i, j, k)
+      do m = 1, rows%n_moving
+        associate (corner => rows%moving(1, m), g => rows%moving(2, m))
+          rows%values(corner, g) = source_value(rows%source(corner, g))
+        end associate
+      end do
     end if
-  end function plane_value
+    do g = 1, n_ghost
+      neighbours = 0
+      do corner = 1, 8
+        if (rows%source(corner, g) == 0) cycle
+        neighbours = neighbours + rows%weight(corner, g) * rows%values(corner, g)
+      end do
+      updated(g) = ((1.0_wp + rows%kappa(g)) * surface(g) - rows%kappa(g) * neighbours) / &
+                   (1.0_wp + rows%kappa(g) * rows%self_weight(g))
+    end do
+    do g = 1, n_ghost
+      limit = max(limit, abs(updated(g) - field(rows%node(g))))
+      field(rows%node(g)) = updated(g)
+    end do
+  contains
+    !> The value at a packed source position (> 0 field, < 0 planes: below, then above).
+    real(wp) function source_value(source) result(value)
+      integer, intent(in) :: source
+      if (source > 0) then
+        value = field(source)
+      else if (-source <= plane_size) then
+        value = below(-source)
+      else
+        value = above(-source - plane_size)
+      end if
+    end function source_value
+  end subroutine sweep_rows
 
   !> Add the final ghost changes of one component to the load bookkeeping.
   subroutine account_ghosts(ibm, grid, component, field, before, change)

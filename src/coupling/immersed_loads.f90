@@ -16,7 +16,6 @@ module immersed_loads
   use mpi_f08, only: MPI_Allreduce, MPI_IN_PLACE, MPI_SUM
   use agglo_kinds, only: wp
   use parallel_env, only: world, mpi_wp
-  use vector_algebra, only: cross
   use fluid_grid, only: fluid_grid_t
   use immersed_boundary, only: immersed_boundary_t
   use immersed_diagnostics, only: record_load_jump
@@ -79,23 +78,19 @@ contains
     subroutine add_component(c, field)
       integer, intent(in) :: c
       real(wp), intent(in) :: field(0:, 0:, 0:)
-      real(wp) :: added(3), factor
+      real(wp) :: factor
       integer :: m, n
       factor = sign * ibm%settings%fluid_density * grid%cell_volume
       associate (nodes => ibm%geometry%component(c), arms => ibm%arms(c))
         do m = 1, nodes%n_interior
           n = nodes%interior_body(m)
-          added = 0
-          added(c) = factor * field(nodes%interior(1, m), nodes%interior(2, m), nodes%interior(3, m))
-          ibm%inertia_change(1:3, n) = ibm%inertia_change(1:3, n) + added
-          ibm%inertia_change(4:6, n) = ibm%inertia_change(4:6, n) + cross(arms%interior(:, m), added)
+          call add_along_axis(ibm%inertia_change(1:3, n), ibm%inertia_change(4:6, n), c, arms%interior(:, m), &
+                              factor * field(nodes%interior(1, m), nodes%interior(2, m), nodes%interior(3, m)))
         end do
         do m = 1, nodes%n_ghost
           n = nodes%ghost(m)%body
-          added = 0
-          added(c) = factor * field(nodes%ghost(m)%node(1), nodes%ghost(m)%node(2), nodes%ghost(m)%node(3))
-          ibm%inertia_change(1:3, n) = ibm%inertia_change(1:3, n) + added
-          ibm%inertia_change(4:6, n) = ibm%inertia_change(4:6, n) + cross(arms%ghost(:, m), added)
+          call add_along_axis(ibm%inertia_change(1:3, n), ibm%inertia_change(4:6, n), c, arms%ghost(:, m), &
+                              factor * field(nodes%ghost(m)%node(1), nodes%ghost(m)%node(2), nodes%ghost(m)%node(3)))
         end do
       end associate
     end subroutine add_component
@@ -108,10 +103,36 @@ contains
     type(fluid_grid_t), intent(in) :: grid
     integer, intent(in) :: n, component
     real(wp), intent(in) :: r(3), delta
-    real(wp) :: added(3)
-    added = 0
-    added(component) = ibm%settings%fluid_density * grid%cell_volume * delta
-    ibm%momentum_change(:, n) = ibm%momentum_change(:, n) + added
-    ibm%angular_change(:, n) = ibm%angular_change(:, n) + cross(r, added)
+    call add_along_axis(ibm%momentum_change(:, n), ibm%angular_change(:, n), component, r, &
+                        ibm%settings%fluid_density * grid%cell_volume * delta)
   end subroutine account
+
+  !> momentum += p e_c and angular += r x (p e_c), written out for the one nonzero component of
+  !> p e_c (the terms of the cross product with a zero factor add nothing). The two products are
+  !> rounded before they are added (volatile: not fused into the sums), as when the cross product
+  !> was a separate function, so the loads are the same to the bit.
+  subroutine add_along_axis(momentum, angular, component, r, p)
+    real(wp), intent(inout) :: momentum(3), angular(3)
+    integer, intent(in) :: component
+    real(wp), intent(in) :: r(3), p
+    real(wp), volatile :: moment_1, moment_2
+    momentum(component) = momentum(component) + p
+    select case (component)
+    case (1)   ! r x (p, 0, 0) = (0, r3 p, -r2 p)
+      moment_1 = r(3) * p
+      moment_2 = r(2) * p
+      angular(2) = angular(2) + moment_1
+      angular(3) = angular(3) - moment_2
+    case (2)   ! r x (0, p, 0) = (-r3 p, 0, r1 p)
+      moment_1 = r(3) * p
+      moment_2 = r(1) * p
+      angular(1) = angular(1) - moment_1
+      angular(3) = angular(3) + moment_2
+    case default   ! r x (0, 0, p) = (r2 p, -r1 p, 0)
+      moment_1 = r(2) * p
+      moment_2 = r(1) * p
+      angular(1) = angular(1) + moment_1
+      angular(2) = angular(2) - moment_2
+    end select
+  end subroutine add_along_axis
 end module immersed_loads

@@ -69,9 +69,9 @@ module immersed_nodes
     !> node_fluid/ghost/interior over the field layout (0:nx+1, 0:ny+1, 0:nz_local+1), halos included
     integer(int8), allocatable :: status(:, :, :)
     integer :: n_ghost = 0, n_interior = 0
-    type(ghost_node_t), allocatable :: ghost(:)     !< (n_ghost)
-    integer, allocatable :: interior(:, :)          !< (3, n_interior): i, j global, k local
-    integer, allocatable :: interior_body(:)        !< (n_interior)
+    type(ghost_node_t), allocatable :: ghost(:)     !< (1:n_ghost in use; the storage may be longer)
+    integer, allocatable :: interior(:, :)          !< (3, 1:n_interior in use): i, j global, k local
+    integer, allocatable :: interior_body(:)        !< (1:n_interior in use)
     integer :: n_fallback = 0                      !< ghosts whose image point was moved back (another body)
     integer :: n_overlap = 0                       !< ghosts whose surface point lies inside another body
     integer :: n_saturated = 0                     !< fallback ghosts below the saturation gap (Couette rows)

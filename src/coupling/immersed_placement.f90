@@ -118,8 +118,8 @@ contains
   subroutine compute_lever_arms(ibm, grid)
     type(immersed_boundary_t), intent(inout) :: ibm
     type(fluid_grid_t), intent(in) :: grid
-    real(wp) :: box(3)
-    integer :: c, m
+    real(wp) :: box(3), x(3), axis_x(grid%nx), axis_y(grid%ny), axis_z(grid%nz_local)
+    integer :: c, m, i
     box = [grid%lx, grid%ly, grid%lz]
     if (allocated(ibm%arm_centres)) deallocate(ibm%arm_centres)
     allocate(ibm%arm_centres(3, size(ibm%bodies)))
@@ -128,12 +128,33 @@ contains
     end do
     do c = 1, 3
       associate (nodes => ibm%geometry%component(c), arms => ibm%arms(c))
-        if (allocated(arms%interior)) deallocate(arms%interior, arms%ghost, arms%surface, arms%opposite)
-        allocate(arms%interior(3, nodes%n_interior), arms%ghost(3, nodes%n_ghost), arms%surface(3, nodes%n_ghost), &
-                 arms%opposite(3, nodes%n_ghost))
+        ! Kept while long enough, as the node lists are (immersed_geometry).
+        if (allocated(arms%interior)) then
+          if (size(arms%interior, 2) < nodes%n_interior .or. size(arms%ghost, 2) < nodes%n_ghost) &
+            deallocate(arms%interior, arms%ghost, arms%surface, arms%opposite)
+        end if
+        if (.not. allocated(arms%interior)) &
+          allocate(arms%interior(3, size(nodes%interior, 2)), arms%ghost(3, size(nodes%ghost)), &
+                   arms%surface(3, size(nodes%ghost)), arms%opposite(3, size(nodes%ghost)))
+        ! The nodes' coordinates along each axis (a node's position is the three of its indices).
+        do i = 1, grid%nx
+          x = node_position(grid, c, i, 1, 1)
+          axis_x(i) = x(1)
+        end do
+        do i = 1, grid%ny
+          x = node_position(grid, c, 1, i, 1)
+          axis_y(i) = x(2)
+        end do
+        do i = 1, grid%nz_local
+          x = node_position(grid, c, 1, 1, i)
+          axis_z(i) = x(3)
+        end do
         do m = 1, nodes%n_interior
-          arms%interior(:, m) = minimum_image(node_position(grid, c, nodes%interior(1, m), nodes%interior(2, m), &
-                                                            nodes%interior(3, m)) - ibm%bodies(nodes%interior_body(m))%centre, box)
+          associate (centre => ibm%bodies(nodes%interior_body(m))%centre)
+            arms%interior(1, m) = minimum_image(axis_x(nodes%interior(1, m)) - centre(1), box(1))
+            arms%interior(2, m) = minimum_image(axis_y(nodes%interior(2, m)) - centre(2), box(2))
+            arms%interior(3, m) = minimum_image(axis_z(nodes%interior(3, m)) - centre(3), box(3))
+          end associate
         end do
         do m = 1, nodes%n_ghost
           arms%ghost(:, m) = minimum_image(nodes%ghost(m)%position - ibm%bodies(nodes%ghost(m)%body)%centre, box)

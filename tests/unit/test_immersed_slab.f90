@@ -232,6 +232,8 @@ contains
                n_cells + 1:n_cells + 4, 3))
     end if
     ibm%planes%remote_ghosts = .true.
+    ! Records edited by hand: counted as a classification (immersed_geometry_t%classifications).
+    ibm%geometry%classifications = ibm%geometry%classifications + 1
   end subroutine build_slab
 
   !> Ghost values set to zero, so that the sweeps solve the ghost rows rather than confirm them.

@@ -6,7 +6,9 @@
 !>   MESH_LEVEL >= 0: the ghost nodes see the icosphere of that level (&bodies geometry = 'mesh',
 !>   20 4^level faces), -1 (default) the analytic spheroid;
 !>   SHAPES = paper (default: needles and disks, below) | sphere (spheres of diameter 10 cells on a
-!>   cubic lattice of ceiling(BODIES^(1/3)) sites per axis, moving and rotating as below).
+!>   cubic lattice of ceiling(BODIES^(1/3)) sites per axis, moving and rotating as below) | mixed
+!>   (needles, disks and spheres of the paper's size in turn on that lattice, their axes near the
+!>   lattice diagonal: up to 128 bodies at 128^3 without contact).
 !>
 !> Water in a 1 mm box at N^3 with the explicit diffusion (AB2) and the incremental pressure, a
 !> random field of rms 1 mm/s and a uniform drive. Bodies of the paper's size (volume-equivalent
@@ -33,7 +35,7 @@ program bench_immersed
   use config_fluid, only: fluid_config_t
   use sample_statistics, only: median
   use spheroid, only: make_spheroid
-  use quaternion, only: quaternion_from_axis_angle
+  use quaternion, only: quaternion_from_axis_angle, quaternion_product
   use icosphere_mesh, only: build_icosphere_mesh
   use immersed_geometry, only: immersed_body_t
   use immersed_boundary, only: ibm_settings_t
@@ -118,7 +120,7 @@ program bench_immersed
   call MPI_Allreduce(MPI_IN_PLACE, ghosts, 1, MPI_INTEGER, MPI_SUM, world)
   call MPI_Allreduce(MPI_IN_PLACE, fallbacks, 1, MPI_INTEGER, MPI_SUM, world)
   if (is_root()) then
-    write(*, '(i5,i3,i3,1x,a9,3f9.2,*(f9.2))') n, n_ranks, n_bodies, trim(coupling), 1.0e3_wp * median(t_fluid), &
+    write(*, '(i5,i3,i5,1x,a9,3f9.2,*(f9.2))') n, n_ranks, n_bodies, trim(coupling), 1.0e3_wp * median(t_fluid), &
         1.0e3_wp * median(t_coupled), median(t_coupled) / median(t_fluid), &
         [(1.0e3_wp * median(t_parts(p, :)), p = 1, n_parts)]
     write(*, '(24x,a,i0,a,i0,a,i0,3a,i0,2a)') 'ghost nodes ', ghosts, ', sweeps (u*) ', scene%predicted%sweeps, &
@@ -145,7 +147,7 @@ contains
     real(wp), parameter :: radius = 50.0e-6_wp, aspect = 5.0_wp
     integer :: m, octant(3), sites, site(3)
     allocate(motion(count))
-    if (trim(shapes) == 'sphere') then
+    if (trim(shapes) == 'sphere' .or. trim(shapes) == 'mixed') then
       sites = 1
       do while (sites**3 < count)
         sites = sites + 1
@@ -158,6 +160,27 @@ contains
         site = [mod(m - 1, sites), mod((m - 1) / sites, sites), (m - 1) / sites**2]
         motion(m)%centre = box * ((0.5_wp + site) / sites + [0.013_wp, 0.027_wp, 0.041_wp] * m / (8 * sites))
         motion(m)%orientation = quaternion_from_axis_angle([1.0_wp, 2.0_wp, 3.0_wp] + m, 0.3_wp * m)
+        motion(m)%velocity = 1.0e-3_wp * [0.6_wp, -0.5_wp, 0.62_wp] * (1 + mod(m, 3))
+        motion(m)%angular_velocity = 20.0_wp * [0.2_wp, 0.5_wp, -0.84_wp] * (1 - 2 * mod(m, 2))
+        cycle
+      end if
+      if (trim(shapes) == 'mixed') then
+        ! Parallel bodies along the lattice diagonal keep clear of their neighbours (at 128 bodies on
+        ! 128^3, 21 cells apart: a needle's axis passes 17 cells from the next site, where a disk reaches 11
+        ! and the needle 4); a turn of 0.02 m rad off the diagonal each keeps them off the grid's symmetry.
+        select case (mod(m - 1, 3))
+        case (0)
+          motion(m)%shape = make_spheroid('needle', radius, 1.0_wp, aspect)
+        case (1)
+          motion(m)%shape = make_spheroid('disk', radius, 1.0_wp, aspect)
+        case default
+          motion(m)%shape = make_spheroid('sphere', radius, 1.0_wp)
+        end select
+        site = [mod(m - 1, sites), mod((m - 1) / sites, sites), (m - 1) / sites**2]
+        motion(m)%centre = box * ((0.5_wp + site) / sites + [0.013_wp, 0.027_wp, 0.041_wp] * m / (8 * sites**2))
+        ! body x onto (1, 1, 1)/sqrt(3): about (0, -1, 1) by acos(1/sqrt(3)), then the small turn
+        motion(m)%orientation = quaternion_product(quaternion_from_axis_angle([1.0_wp, 2.0_wp, 3.0_wp] + m, 0.02_wp), &
+            quaternion_from_axis_angle([0.0_wp, -1.0_wp, 1.0_wp], acos(1.0_wp / sqrt(3.0_wp))))
         motion(m)%velocity = 1.0e-3_wp * [0.6_wp, -0.5_wp, 0.62_wp] * (1 + mod(m, 3))
         motion(m)%angular_velocity = 20.0_wp * [0.2_wp, 0.5_wp, -0.84_wp] * (1 - 2 * mod(m, 2))
         cycle
