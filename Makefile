@@ -104,7 +104,7 @@ else
   Q = @echo "  $(notdir $@)";
 endif
 
-.PHONY: help deps build run test bench validate validate-decks clean tools-deps
+.PHONY: help deps build run run-suspension test bench validate validate-decks clean tools-deps
 .SECONDARY:
 help: ## list the targets
 	@echo "Agglo - make targets (MODE=release|debug, ARCH=native|x86-64-v3|..., BUILD=dir, NP=ranks, DECK=deck for run):"
@@ -168,6 +168,14 @@ run: deps tools-deps ## install, build, and run DECK (default input/default.nml)
 	  tools/agglo-figure8 output/default -o output/default/figure8.png > /dev/null && \
 	  echo "picture: output/default/figure8.png (|u| on the plane through both needles, latest snapshot);" \
 	       "the whole run in ParaView: output/default/fields.xdmf"; fi
+
+# The smallest suspension deck (docs/scenes.md, "Suspension"): 95 spheres in vacuum, 40 000 steps.
+# One rank unless NP is given: without a fluid every rank repeats the same particle work.
+SUSPENSION_DECK := input/suspension_sphere_none.nml
+SUSPENSION_NP := $(if $(filter command line environment,$(origin NP)),$(NP),1)
+run-suspension: deps tools-deps ## install, build, and run the smallest suspension deck (1 rank, or NP), with ARGS
+	@$(MAKE) --no-print-directory build
+	$(MPIRUN) -np $(SUSPENSION_NP) $(BUILD)/agglo $(SUSPENSION_DECK) $(ARGS)
 
 test: deps tools-deps ## install, build, and run every test (closing line "N passed, N failed")
 	@$(MAKE) --no-print-directory build $(TEST_PROGRAMS)

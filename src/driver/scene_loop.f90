@@ -211,7 +211,7 @@ contains
       if (with_fluid) call start_fluid_outputs()
       if (with_particles .and. with_fluid) call log_line(scene_name//': particle coupling '''// &
           trim(cfg%scene%particle_coupling)//''', particle step = fluid step / '//int_text(substeps)// &
-          '; particles.h5, summary.json')
+          '; particles.h5'//trim(merge(', summary.json', '              ', with_pair)))
 
       if (with_fluid .and. .not. cfg%run%restart) then
         call compute_fluid_statistics(solver, 0.0_wp, stats)
@@ -523,8 +523,9 @@ contains
                         real_text(loop%time)//' s, before the end time '//real_text(loop%end_time)//' s')
       else if (with_particles .and. .not. with_pair) then
         call log_line(scene_name//': '//int_text(system%n)//' bodies, '//int_text(summary%collisions)// &
-            ' collisions, t = '//real_text(solver%time)//' s; particles.h5, fluid_statistics.dat and fields.xdmf '// &
-            '(and bodies_loads.dat with particle_coupling = ''resolved'') in '//run_file(''))
+            ' collisions, t = '//real_text(solver%time)//' s; particles.h5, fluid_statistics.dat, fields.xdmf'// &
+            trim(merge(' and bodies_loads.dat', '                     ', cfg%scene%particle_coupling == 'resolved'))// &
+            ' in '//run_file(''))
       else if (with_particles) then
         call log_line('resolved pair scene: outcome '//trim(summary%outcome)//' at t = '//real_text(solver%time)// &
             ' s; particles.h5, summary.json, fluid_statistics.dat and fields.xdmf in '//run_file(''))

@@ -157,7 +157,7 @@ contains
     end do
     if (system%n > 4) speeds = speeds//', ... (rms '// &
         scientific_text(sqrt(sum(velocity**2) / system%n))//' over '//int_text(system%n)//' bodies)'
-    call log_line('resolved pair scene: start velocities on top of the fluid''s: |u_f| = '//speeds(3:)// &
+    call log_line('resolved fluid: the bodies'' start velocities on top of the fluid''s: |u_f| = '//speeds(3:)// &
         ' m/s at the centres')
   end subroutine add_fluid_motion
   !> &scene particles = 'free': the bodies of &bodies (shape, radius, aspect_ratio, centre, axis,

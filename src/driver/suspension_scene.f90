@@ -133,8 +133,15 @@ contains
     estimate = real(sum(counts), wp) * suspension_memory_estimate() + 16.0_wp * 2.0_wp**20
     ! The smallest limit of the ranks (each reads its own machine's): every rank decides alike.
     limit = -global_max(-memory_limit_bytes(cfg, source))
-    if (estimate > limit .or. sum(counts) > huge(1) / 4) call input_error('suspension', 'count', &
-        int_text(sum(counts))//' bodies in all', 'bodies whose estimated memory ('// &
+    ! Named as the deck gives the amount: the count, or the volume fraction (with the bodies it means).
+    variable = 'count'
+    requested = int_text(sum(counts))//' bodies in all'
+    if (any(cfg%suspension%volume_fraction > 0.0_wp)) then
+      variable = 'volume_fraction'
+      requested = real_text(sum(cfg%suspension%volume_fraction))//' in all ('//int_text(sum(counts))//' bodies)'
+    end if
+    if (estimate > limit .or. sum(counts) > huge(1) / 4) call input_error('suspension', variable, &
+        requested, 'bodies whose estimated memory ('// &
         scientific_text(estimate / 2.0_wp**30)//' GiB: '//int_text(nint(suspension_memory_estimate()))// &
         ' bytes per body and 16 MiB of output buffer) is within '//source//' ('// &
         scientific_text(limit / 2.0_wp**30)//' GiB); fewer bodies, a smaller volume_fraction or a larger radius')

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# checks: 11
+# checks: 14
 # Bad &suspension decks (&scene particles = 'suspension'; docs/decks.md, &suspension) are refused
 # with the group, the variable, the value and what is allowed: before anything runs for the
 # values and their combinations; at the placement, before any body is allocated, for
@@ -7,8 +7,11 @@
 #    jams near 38%, docs/theory.md "Suspension placement"), the message giving the bodies placed,
 #    the fraction reached and the tries made (on 2 ranks: every rank places the same bodies and
 #    stops together);
-#  - more bodies than memory allows: the estimate and the limit named (&suspension memory_limit);
-# and, with the resolved coupling, bodies thinner than the immersed boundary's 4 cells.
+#    the same for a count (named count);
+#  - more bodies than memory allows: the estimate and the limit named (&suspension memory_limit, or
+#    the machine's available memory for 2.4e10 bodies), the variable the deck gives the amount by;
+# and, with the resolved coupling, bodies thinner than the immersed boundary's 4 cells (a disk; a
+# needle of the second species), with the grid they need.
 set -u
 . "$(cd "$(dirname "$0")" && pwd)/deck_error_lib.sh"
 work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
@@ -28,11 +31,22 @@ grep -qE "it placed [0-9]+ bodies, volume fraction [0-9.E+-]+, after [0-9]+ trie
   echo "FAIL unreachable_volume_fraction_says_what_was_reached: $(grep -m1 'agglo: error' unreachable_volume_fraction.out)"
 expect_deck_error unreachable_volume_fraction_2_ranks 2 "$base
 &suspension volume_fraction = 0.45, max_attempts = 200 /" "it placed" "tries (max_attempts = 200 per body"
-expect_error memory_limit "&suspension count = 95 bodies in all is not allowed; allowed: bodies whose estimated memory" \
+expect_error unreachable_count \
+  "&suspension count = 4.71239E-01 by volume (900 bodies) is not allowed; allowed: a suspension random placement reaches: it placed" \
+  "&suspension count = 900, max_attempts = 100 /"
+expect_error memory_limit \
+  "&suspension volume_fraction = 5.00000E-02 in all (95 bodies) is not allowed; allowed: bodies whose estimated memory" \
   "&suspension volume_fraction = 0.05, memory_limit = 1.0e-3 /"
 grep -qE "bytes per body and 16 MiB of output buffer\) is within &suspension memory_limit \(1.0000E-003 GiB\)" memory_limit.out \
   && echo "PASS memory_limit_names_estimate_and_limit" || \
   echo "FAIL memory_limit_names_estimate_and_limit: $(grep -m1 'agglo: error' memory_limit.out)"
+# 2.4e10 bodies of 0.1 um at 10%: 2e5 GiB, more than any machine has (refused before any allocation).
+expect_deck_error memory_available 1 "&run name = 's', end_time = 1.0e-6, dt = 1.0e-7, overwrite = .true. /
+&scene fluid = 'none', particles = 'suspension', dlvo = .false. /
+&pair density = 2710.0 /
+&suspension radius = 1.0e-7, volume_fraction = 0.1, min_gap = 1.0e-8 /" \
+  "&suspension volume_fraction = 1.00000E-01 in all (23873241464 bodies) is not allowed; allowed: bodies whose" \
+  "is within the available memory ("
 expect_deck_error thin_disk_resolved 1 "&run name = 's', end_time = 1.0e-6, dt = 1.0e-7, overwrite = .true. /
 &scene fluid = 'resolved', particles = 'suspension', particle_coupling = 'resolved', added_mass = .true. /
 &grid nx = 32, ny = 32, nz = 32 /
@@ -40,6 +54,13 @@ expect_deck_error thin_disk_resolved 1 "&run name = 's', end_time = 1.0e-6, dt =
 &suspension shape = 'disk', radius = 50.0e-6, aspect_ratio = 5.0, count = 4 /" \
   "&suspension radius(1) = 5.00000E-05 (disk" "a body at least 4 cells thick for the immersed boundary" \
   "&grid nx = ny = nz >= 117"
+expect_deck_error thin_second_species_resolved 1 "&run name = 's', end_time = 1.0e-6, dt = 1.0e-7, overwrite = .true. /
+&scene fluid = 'resolved', particles = 'suspension', particle_coupling = 'resolved', added_mass = .true. /
+&grid nx = 32, ny = 32, nz = 32 /
+&pair density = 2710.0 /
+&suspension shape = 'sphere', 'needle', radius = 80.0e-6, 50.0e-6, aspect_ratio = 1.0, 5.0, count = 2, 4 /" \
+  "&suspension radius(2) = 5.00000E-05 (needle 1.87" "a body at least 4 cells thick for the immersed boundary" \
+  "&grid nx = ny = nz >= 69"
 expect_error count_and_fraction "&suspension count(1) = 10 with volume_fraction(1) = 1.00000E-02 is not allowed; allowed: exactly one of count > 0 and volume_fraction > 0 per species" \
   "&suspension count = 10, volume_fraction = 0.01 /"
 expect_error species_gap "&suspension shape(3) = 'disk' after an empty shape(2)" \
