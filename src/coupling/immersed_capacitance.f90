@@ -159,6 +159,12 @@ contains
           work%hessenberg(i, j) = temp
         end do
         temp = hypot(work%hessenberg(j, j), work%hessenberg(j + 1, j))
+        if (.not. (temp > 0.0_wp)) then
+          ! A breakdown (the Krylov space is invariant and the last vector adds nothing): solve with
+          ! the columns so far; the outer loop checks the true residual.
+          j = j - 1
+          exit
+        end if
         work%cosines(j) = work%hessenberg(j, j) / temp
         work%sines(j) = work%hessenberg(j + 1, j) / temp
         work%hessenberg(j, j) = temp
@@ -168,6 +174,7 @@ contains
         estimate = abs(work%projected(j + 1))
         if (estimate <= scaled_target) exit
       end do
+      if (j == 0) exit
       ! y from the triangle; z += M V y, u += (images) y.
       do i = j, 1, -1
         y(i) = (work%projected(i) - dot_product(work%hessenberg(i, i + 1:j), y(i + 1:j))) / work%hessenberg(i, i)

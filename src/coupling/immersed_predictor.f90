@@ -11,10 +11,12 @@
 !> stencils may hold fluid nodes, so the whole system is solved at once: replacing the rows of an
 !> FFT Crank-Nicolson solution afterwards would not reach this fixed point (docs/theory.md).
 !>
-!> The system is non-symmetric (the ghost rows); it is solved per component with a hypre Krylov
-!> method (hypre_solver), by default BiCGSTAB preconditioned by the FFT Helmholtz solve with a
-!> Jacobi correction on the replaced rows (hypre_fft_preconditioner), chosen by measurement
-!> (docs/studies/performance.md, "Crank-Nicolson with the immersed boundary"). The right-hand side
+!> The system is non-symmetric (the ghost rows); it is solved per component. By default (method
+!> 'capacitance') by GMRES on the ghost rows only, one FFT Helmholtz solve per iteration and no
+!> matrix (immersed_capacitance; docs/studies/performance.md, "Crank-Nicolson with two bodies at
+!> 128^3"). The reference (method 'hypre') is a hypre Krylov method on the whole system
+!> (hypre_solver), BiCGSTAB preconditioned by the FFT Helmholtz solve with a Jacobi correction on
+!> the replaced rows (hypre_fft_preconditioner), as follows. The right-hand side
 !> is set every step. After a classification (bodies moved) only the body rows are assembled again
 !> and compared with the last matrix's: when every ghost and interior node kept its status and
 !> every ghost row its stencil nodes (a sub-cell move), their new values are written into the
