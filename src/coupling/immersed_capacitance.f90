@@ -65,14 +65,17 @@ contains
   !> local rows in nodes' order; halo: the planes beyond the slab the stencils reach (>= 1).
   !> z: on entry the first guess of the ghost forcing, on exit the converged one. fft: H^{-1}
   !> (an FFT Helmholtz solve without replaced rows).
-  subroutine capacitance_solve(work, grid, nodes, ghost_rows, interior_rows, rhs, halo, fft, tolerance, &
-                               max_iterations, restart, z, solution, result)
+  subroutine capacitance_solve(work, grid, nodes, ghost_rows, interior_rows, rhs, halo, stencils_leave_slab, fft, &
+                               tolerance, max_iterations, restart, z, solution, result)
     type(capacitance_work_t), intent(inout) :: work
     type(fluid_grid_t), intent(in) :: grid
     type(component_nodes_t), intent(in) :: nodes
     integer, intent(in) :: ghost_rows(:), interior_rows(:)
     real(wp), intent(in) :: rhs(:)
     integer, intent(in) :: halo
+    !> some ghost stencil (on some rank) reaches beyond its slab (the same on every rank): else the
+    !> ghost rows need no planes from the neighbours and no exchange is made
+    logical, intent(in) :: stencils_leave_slab
     type(fft_helmholtz_preconditioner_t), intent(inout) :: fft
     real(wp), intent(in) :: tolerance
     integer, intent(in) :: max_iterations, restart
@@ -104,7 +107,7 @@ contains
     work%forcing = 0
     do
       ! The true residual of the ghost rows (the whole system's, module header).
-      call apply_ghost_rows(work, grid, nodes, halo, solution, residual)
+      call apply_ghost_rows(work, grid, nodes, halo, stencils_leave_slab, solution, residual)
       residual = rhs(ghost_rows) - residual
       residual_norm = global_norm(residual)
       result%relative_residual = residual_norm / max(sqrt(norms(1)), tiny(1.0_wp))
@@ -136,7 +139,7 @@ contains
         call fft%apply(work%forcing, work%images(:, j))
         result%fft_solves = result%fft_solves + 1
         work%images(interior_rows, j) = 0
-        call apply_ghost_rows(work, grid, nodes, halo, work%images(:, j), work%basis(:, j + 1))
+        call apply_ghost_rows(work, grid, nodes, halo, stencils_leave_slab, work%images(:, j), work%basis(:, j + 1))
         work%basis(:, j + 1) = work%basis(:, j + 1) / diagonal
         ! Classical Gram-Schmidt twice: one reduction of j inner products per pass.
         ! The second pass's reduction carries the squared norm before it: its coefficients are of
@@ -326,16 +329,17 @@ contains
 
   !> The ghost rows applied to a vector of this rank's rows (collective):
   !> (A_G values)_g = (1 + kappa w_G) u_G + kappa sum_{corners /= G} w_c u_c.
-  subroutine apply_ghost_rows(work, grid, nodes, halo, values, product)
+  subroutine apply_ghost_rows(work, grid, nodes, halo, exchange, values, product)
     type(capacitance_work_t), intent(inout) :: work
     type(fluid_grid_t), intent(in) :: grid
     type(component_nodes_t), intent(in) :: nodes
     integer, intent(in) :: halo
+    logical, intent(in) :: exchange   !< the stencils reach beyond the slab (on some rank)
     real(wp), intent(in) :: values(:)
     real(wp), intent(out) :: product(:)
     integer :: g, corner, row
     real(wp) :: total
-    call exchange_rows_planes(work, grid, halo, values)
+    if (exchange) call exchange_rows_planes(work, grid, halo, values)
     do g = 1, nodes%n_ghost
       associate (ghost => nodes%ghost(g))
         row = ghost%node(1) + grid%nx * ((ghost%node(2) - 1) + grid%ny * (ghost%node(3) - 1))

@@ -462,7 +462,8 @@ contains
         sys%forcing = 0
       end if
       call capacitance_solve(self%reduced, grid, nodes, sys%ghost_rows, sys%interior_rows, sys%rhs, &
-                             self%ibm%planes%halo_planes, self%inverse, self%config%tolerance, &
+                             self%ibm%planes%halo_planes, self%ibm%planes%stencils_leave_slab, self%inverse, &
+                             self%config%tolerance, &
                              self%config%max_iterations, self%config%gmres_restart, sys%forcing, sys%solution, result)
     end associate
     status%converged = result%converged
