@@ -11,10 +11,12 @@
 !> stencils may hold fluid nodes, so the whole system is solved at once: replacing the rows of an
 !> FFT Crank-Nicolson solution afterwards would not reach this fixed point (docs/theory.md).
 !>
-!> The system is non-symmetric (the ghost rows); it is solved per component with a hypre Krylov
-!> method (hypre_solver), by default BiCGSTAB preconditioned by the FFT Helmholtz solve with a
-!> Jacobi correction on the replaced rows (hypre_fft_preconditioner), chosen by measurement
-!> (docs/studies/performance.md, "Crank-Nicolson with the immersed boundary"). The right-hand side
+!> The system is non-symmetric (the ghost rows); it is solved per component. By default (method
+!> 'capacitance') by GMRES on the ghost rows only, one FFT Helmholtz solve per iteration and no
+!> matrix (immersed_capacitance; docs/studies/performance.md, "Crank-Nicolson with two bodies at
+!> 128^3"). The reference (method 'hypre') is a hypre Krylov method on the whole system
+!> (hypre_solver), BiCGSTAB preconditioned by the FFT Helmholtz solve with a Jacobi correction on
+!> the replaced rows (hypre_fft_preconditioner), as follows. The right-hand side
 !> is set every step. After a classification (bodies moved) only the body rows are assembled again
 !> and compared with the last matrix's: when every ghost and interior node kept its status and
 !> every ghost row its stencil nodes (a sub-cell move), their new values are written into the
@@ -40,7 +42,7 @@ module immersed_predictor
   use halo_exchange, only: exchange_slab_halos
   use poisson_fft, only: poisson_fft_t, poisson_create
   use predictor_solver, only: predictor_solver_t, apply_predictor_operator
-  use timer_registry, only: timer_register
+  use timer_registry, only: timer_register, timer_tic, timer_toc
   use hypre_solver, only: sparse_rows_t, linear_solver_config_t, linear_solver_t, solve_status_t, &
                           linear_solver_create, linear_solver_update_values, linear_solver_replace_matrix, &
                           linear_solver_solve, linear_solver_destroy, rows_local_count
@@ -50,6 +52,8 @@ module immersed_predictor
   use immersed_geometry, only: ghost_node_t
   use immersed_boundary, only: immersed_boundary_t, imposition_report_t, rigid_velocity, ghost_surface_value
   use immersed_loads, only: account
+  use immersed_capacitance, only: capacitance_work_t, capacitance_result_t, capacitance_solve, capacitance_first_guess, &
+                                  ghost_row_diagonal
   implicit none
   private
   public :: immersed_predictor_t, immersed_predictor_create, immersed_predictor_reclassified, &
@@ -70,6 +74,7 @@ module immersed_predictor
     real(wp), allocatable :: rhs(:), solution(:)              !< this rank's rows
     real(wp), allocatable :: guess(:)                         !< the Krylov solve's first guess (u^n)
     real(wp), allocatable :: b_ghost(:), b_interior(:)        !< b of fluid_predict at those rows
+    real(wp), allocatable :: forcing(:)                       !< the ghost forcing z (method 'capacitance')
   end type component_system_t
 
   type, extends(predictor_solver_t) :: immersed_predictor_t
@@ -77,6 +82,11 @@ module immersed_predictor
     !> immersed boundary before each fluid_predict (the predictor adds the rows' momentum to it).
     type(immersed_boundary_t), pointer :: ibm => null()
     type(linear_solver_config_t) :: config
+    !> 'capacitance': GMRES on the ghost rows with the FFT Helmholtz solve (immersed_capacitance,
+    !> the measured choice); 'hypre': the whole system with hypre (config), as a reference
+    character(len=16) :: method = 'capacitance'
+    type(fft_helmholtz_preconditioner_t) :: inverse   !< H^{-1}, the FFT solve the capacitance method uses
+    type(capacitance_work_t) :: reduced               !< its work arrays (the components solve in turn)
     type(component_system_t) :: system(3)
     type(sparse_rows_t) :: helmholtz                  !< (I - alpha L_h) on every row, for the current alpha
     type(fluid_grid_t), pointer :: grid => null()     !< a copy of the fluid grid (heap) for the preconditioner
@@ -92,6 +102,7 @@ module immersed_predictor
     integer :: builds = 0                             !< matrices built (after a classification)
     integer :: updates = 0                            !< of those (per component), values only (same structure)
     integer :: full_builds = 0                        !< component matrices built with a new pattern
+    integer :: fft_solves = 0                         !< FFT Helmholtz solves of the capacitance method, summed
   contains
     procedure :: solve => immersed_predictor_solve
   end type immersed_predictor_t
@@ -117,13 +128,16 @@ contains
     type(linear_solver_config_t), intent(in) :: config
     integer :: c
     predictor%config = config
-    ! The breakdown's order: the solves, the preconditioner within them, then the matrices.
+    ! The breakdown's order: the solves (one of the two methods), the FFT solves within them, then
+    ! the matrices (the reference method's); timers never started are not listed.
     c = timer_register('hypre')
+    c = timer_register('ghost-row GMRES')
     c = timer_register('  FFT preconditioner')
     c = timer_register('hypre matrices')
     if (.not. associated(predictor%grid)) allocate(predictor%grid, predictor%fft)
     predictor%grid = grid
     call poisson_create(predictor%fft, predictor%grid, 'estimate')
+    call fft_preconditioner_create(predictor%inverse, predictor%grid, predictor%fft, 1.0_wp)
     call allocate_field(grid, predictor%work)
     do c = 1, 3
       if (predictor%system(c)%created) call linear_solver_destroy(predictor%system(c)%solver)
@@ -171,14 +185,25 @@ contains
     if (.not. associated(self%ibm)) call fatal('immersed predictor: no immersed boundary given')
     if (.not. (alpha > 0.0_wp)) call fatal('immersed predictor: needs the Crank-Nicolson predictor (alpha > 0)')
     t0 = wall_time()
-    if (alpha /= self%alpha) then
+    if (self%method == 'capacitance') then
+      ! Only the lists of the body rows: no matrix (immersed_capacitance).
+      if (self%stale) then
+        do c = 1, 3
+          call assemble_row_lists(self, grid, c)
+        end do
+        self%builds = self%builds + 1
+      end if
+      self%inverse%coefficient = alpha
+    else if (alpha /= self%alpha) then
       if (allocated(self%helmholtz%row_start)) then
         call helmholtz_rows_set_coefficient(grid, alpha, self%helmholtz)
       else
         call helmholtz_rows_create(grid, alpha, self%helmholtz)
       end if
     end if
-    if (self%stale) then
+    if (self%method == 'capacitance') then
+      continue
+    else if (self%stale) then
       do c = 1, 3
         call build_system(self, grid, c, alpha)
       end do
@@ -241,13 +266,12 @@ contains
     end associate
     associate (sys => self%system(c), nodes => self%ibm%geometry%component(c))
       if (.not. associated(sys%preconditioner)) allocate(sys%preconditioner)
-      if (.not. allocated(sys%rhs)) then
-        call fft_preconditioner_create(sys%preconditioner, self%grid, self%fft, alpha)
-        allocate(sys%rhs(rows_local_count(self%helmholtz)), sys%solution(rows_local_count(self%helmholtz)))
-      end if
+      if (.not. associated(sys%preconditioner%grid)) &
+          call fft_preconditioner_create(sys%preconditioner, self%grid, self%fft, alpha)
+      if (.not. allocated(sys%solution)) allocate(sys%solution(rows_local_count(self%helmholtz)))
       sys%preconditioner%coefficient = alpha
       sys%preconditioner%replaced_rows = [sys%ghost_rows, sys%interior_rows]
-      sys%preconditioner%replaced_diagonal = [(ghost_diagonal(nodes%ghost(g)), g = 1, nodes%n_ghost), &
+      sys%preconditioner%replaced_diagonal = [(ghost_row_diagonal(nodes%ghost(g)), g = 1, nodes%n_ghost), &
                                                (1.0_wp, m = 1, nodes%n_interior)]
       if (same_structure .and. alpha == self%alpha) then
         ! The fluid rows keep their values: only the body rows get theirs, in place.
@@ -271,13 +295,6 @@ contains
     end associate
   end subroutine build_system
 
-  !> The diagonal entry of a ghost row (Eq. 7): 1 + kappa w_G, w_G the weight of G in its own stencil.
-  pure real(wp) function ghost_diagonal(ghost)
-    type(ghost_node_t), intent(in) :: ghost
-    ghost_diagonal = 1.0_wp
-    if (ghost%self_corner > 0) ghost_diagonal = 1.0_wp + ghost%extrapolation * ghost%weight(ghost%self_corner)
-  end function ghost_diagonal
-
   !> True on every rank when flag is true on every rank (collective).
   logical function global_all(flag)
     logical, intent(in) :: flag
@@ -296,6 +313,33 @@ contains
                                       self%system(c)%body_rows)
   end subroutine helmholtz_values
 
+  !> The local rows of component c's ghost and interior nodes in the classification's order, and
+  !> in_list (optional): for each local row g > 0 for the g-th ghost, -m for the m-th interior node,
+  !> 0 for a fluid row. Also sizes the right-hand side, solution and b arrays of the body rows.
+  subroutine assemble_row_lists(self, grid, c, in_list)
+    type(immersed_predictor_t), intent(inout) :: self
+    type(fluid_grid_t), intent(in) :: grid
+    integer, intent(in) :: c
+    integer, allocatable, intent(out), optional :: in_list(:)
+    integer :: n_local, g, m
+    n_local = grid%nx * grid%ny * grid%nz_local
+    associate (nodes => self%ibm%geometry%component(c), sys => self%system(c))
+      if (allocated(sys%ghost_rows)) deallocate(sys%ghost_rows, sys%interior_rows, sys%b_ghost, sys%b_interior)
+      allocate(sys%ghost_rows(nodes%n_ghost), sys%interior_rows(nodes%n_interior))
+      allocate(sys%b_ghost(nodes%n_ghost), sys%b_interior(nodes%n_interior))
+      if (.not. allocated(sys%rhs)) allocate(sys%rhs(n_local))
+      if (present(in_list)) allocate(in_list(n_local), source=0)
+      do g = 1, nodes%n_ghost
+        sys%ghost_rows(g) = local_row(grid, nodes%ghost(g)%node)
+        if (present(in_list)) in_list(sys%ghost_rows(g)) = g
+      end do
+      do m = 1, nodes%n_interior
+        sys%interior_rows(m) = local_row(grid, nodes%interior(:, m))
+        if (present(in_list)) in_list(sys%interior_rows(m)) = -m
+      end do
+    end associate
+  end subroutine assemble_row_lists
+
   !> The body rows of component c (compact CSR, ascending local rows): the ghost row (G, then the
   !> stencil's other corners) and the identity row of each interior node; and the lists of the
   !> ghost and interior rows in the classification's order.
@@ -304,23 +348,11 @@ contains
     type(fluid_grid_t), intent(in) :: grid
     integer, intent(in) :: c
     integer, allocatable :: in_list(:)
-    integer :: n_local, n_body, r, s, g, m, entry, corner
+    integer :: n_local, n_body, r, s, entry, corner
 
     n_local = grid%nx * grid%ny * grid%nz_local
+    call assemble_row_lists(self, grid, c, in_list)
     associate (nodes => self%ibm%geometry%component(c), sys => self%system(c))
-      if (allocated(sys%ghost_rows)) deallocate(sys%ghost_rows, sys%interior_rows, sys%b_ghost, sys%b_interior)
-      allocate(sys%ghost_rows(nodes%n_ghost), sys%interior_rows(nodes%n_interior))
-      allocate(sys%b_ghost(nodes%n_ghost), sys%b_interior(nodes%n_interior))
-      ! in_list(r): g > 0 for the g-th ghost, -m for the m-th interior node, 0 for a fluid row.
-      allocate(in_list(n_local), source=0)
-      do g = 1, nodes%n_ghost
-        sys%ghost_rows(g) = local_row(grid, nodes%ghost(g)%node)
-        in_list(sys%ghost_rows(g)) = g
-      end do
-      do m = 1, nodes%n_interior
-        sys%interior_rows(m) = local_row(grid, nodes%interior(:, m))
-        in_list(sys%interior_rows(m)) = -m
-      end do
       n_body = nodes%n_ghost + nodes%n_interior
       sys%body_rows = pack([(r, r = 1, n_local)], in_list /= 0)
       if (size(sys%body_rows) /= n_body) call fatal('immersed predictor: two ghost or interior records on one '// &
@@ -340,7 +372,7 @@ contains
         sys%body%columns(entry) = self%helmholtz%columns(self%helmholtz%row_start(r))   ! the diagonal
         if (in_list(r) > 0) then
           associate (ghost => nodes%ghost(in_list(r)))
-            sys%body%values(entry) = ghost_diagonal(ghost)
+            sys%body%values(entry) = ghost_row_diagonal(ghost)
             do corner = 1, 8
               if (corner == ghost%self_corner) cycle
               entry = entry + 1
@@ -382,12 +414,16 @@ contains
         sys%rhs(sys%interior_rows(m)) = rigid_velocity(self%ibm, nodes%interior_body(m), c, arms%interior(:, m))
         scale = max(scale, abs(sys%rhs(sys%interior_rows(m))))
       end do
-      if (self%has_guess) then
-        sys%solution = sys%guess
+      if (self%method == 'capacitance') then
+        call solve_reduced(self, grid, c, status)
       else
-        sys%solution = sys%rhs
+        if (self%has_guess) then
+          sys%solution = sys%guess
+        else
+          sys%solution = sys%rhs
+        end if
+        call linear_solver_solve(sys%solver, sys%rhs, sys%solution, status)
       end if
-      call linear_solver_solve(sys%solver, sys%rhs, sys%solution, status)
       if (.not. status%converged) then
         write(text, '(a,i0,a,es10.3,a,es10.3,a)') 'immersed predictor: the Crank-Nicolson system of '// &
             component_names(c)//' with the immersed-boundary rows did not converge in ', status%iterations, &
@@ -401,6 +437,43 @@ contains
       call rows_to_field(grid, sys%solution, field)
     end associate
   end subroutine solve_component
+
+  !> Component c's system by GMRES on its ghost rows (immersed_capacitance), from the ghost forcing
+  !> of u^n when the caller gave it (immersed_predictor_first_guess), else from 0 (collective).
+  subroutine solve_reduced(self, grid, c, status)
+    type(immersed_predictor_t), intent(inout) :: self
+    type(fluid_grid_t), intent(in) :: grid
+    integer, intent(in) :: c
+    type(solve_status_t), intent(out) :: status
+    type(capacitance_result_t) :: result
+    call timer_tic('ghost-row GMRES')
+    associate (sys => self%system(c), nodes => self%ibm%geometry%component(c))
+      if (.not. allocated(sys%solution)) allocate(sys%solution(size(sys%rhs)))
+      if (allocated(sys%forcing)) then
+        if (size(sys%forcing) /= nodes%n_ghost) deallocate(sys%forcing)
+      end if
+      if (.not. allocated(sys%forcing)) allocate(sys%forcing(nodes%n_ghost))
+      if (self%has_guess) then
+        sys%solution = sys%guess
+        sys%solution(sys%interior_rows) = sys%rhs(sys%interior_rows)
+        call capacitance_first_guess(self%reduced, grid, nodes, self%ibm%planes%halo_planes, self%inverse%coefficient, &
+                                     sys%solution, sys%rhs(sys%ghost_rows), sys%forcing)
+      else
+        sys%forcing = 0
+      end if
+      call capacitance_solve(self%reduced, grid, nodes, sys%ghost_rows, sys%interior_rows, sys%rhs, &
+                             self%ibm%planes%halo_planes, self%ibm%planes%stencils_leave_slab, self%inverse, &
+                             self%config%tolerance, &
+                             self%config%max_iterations, self%config%gmres_restart, sys%forcing, sys%solution, result)
+    end associate
+    status%converged = result%converged
+    status%iterations = result%iterations
+    status%relative_residual = result%relative_residual
+    status%tolerance = self%config%tolerance
+    status%max_iterations = self%config%max_iterations
+    self%fft_solves = self%fft_solves + result%fft_solves
+    call timer_toc('ghost-row GMRES')
+  end subroutine solve_reduced
 
   !> The momentum each ghost and interior node of component c adds (module header): its
   !> Helmholtz-row residual (I - alpha L_h) u* - b, to the load bookkeeping. field's halos current.

@@ -376,8 +376,16 @@ contains
     integer :: n
     if (scene%loads_opened) close(scene%loads_unit)
     scene%loads_opened = .false.
-    if (scene%predictor%builds > 0) then
-      ! Crank-Nicolson: the predicted report is the hypre solve's (immersed_predictor).
+    if (scene%predictor%builds > 0 .and. scene%predictor%method == 'capacitance') then
+      ! Crank-Nicolson: the predicted report is the predictor's Krylov solve (immersed_predictor).
+      call log_line('immersed scene: Crank-Nicolson predictor with the body rows: GMRES on the ghost rows with the '// &
+          'FFT Helmholtz solve, body rows listed '//int_text(scene%predictor%builds)//' times in '// &
+          real_text(scene%predictor%build_seconds)//' s, FFT solves '//int_text(scene%predictor%fft_solves)// &
+          ', solves '//real_text(scene%predictor%solve_seconds)// &
+          ' s; last step GMRES iterations '//int_text(scene%predicted%sweeps)//', relative residual '// &
+          real_text(scene%predicted%residual)//', slip '//real_text(scene%projected%largest_change)// &
+          ', cut-cell divergence '//real_text(scene%divergence)//' 1/s')
+    else if (scene%predictor%builds > 0) then
       call log_line('immersed scene: Crank-Nicolson predictor with the body rows: '// &
           trim(scene%predictor%config%method)//' + '//trim(merge('FFT Helmholtz   ', scene%predictor%config%preconditioner, &
           scene%predictor%config%preconditioner == 'user'))//', matrices built '//int_text(scene%predictor%builds)// &

@@ -124,12 +124,12 @@ contains
     call particle_output_flush(self%output)
   end subroutine prescribed_write_checkpoint
 
-  !> With Crank-Nicolson the predicted report is the hypre solve's (immersed_predictor).
+  !> With Crank-Nicolson the predicted report is the predictor's Krylov solve (immersed_predictor).
   subroutine prescribed_log_progress(self, solver)
     class(prescribed_hydrodynamics_t), intent(in) :: self
     type(fluid_solver_t), intent(in) :: solver
     call log_line('immersed boundary: '// &
-        trim(merge('hypre iterations', 'sweeps          ', solver%crank_nicolson))//' '// &
+        trim(merge('Krylov iterations', 'sweeps           ', solver%crank_nicolson))//' '// &
         int_text(self%bodies%predicted%sweeps)//', residual '//real_text(self%bodies%predicted%residual)// &
         ', slip after projection '//real_text(self%bodies%projected%largest_change)//', cut-cell divergence '// &
         real_text(self%bodies%divergence)//' 1/s, image-point fallbacks '//int_text(self%fallbacks))

@@ -7,7 +7,7 @@
 #    explicit-diffusion limit 1/12), 1 rank and 2 ranks (a body crosses the rank boundary and the
 #    periodic wrap): every load in bodies_loads.dat equal to 1e-9 of the largest load (the Krylov
 #    solve converges to 1e-12 on both; only the order of the sums differs), for both couplings;
-#  - the log names the hypre iterations and the residual;
+#  - the log names the Krylov iterations and the residual;
 #  - non-convergence stops the run with the iterations, the residual and the advice;
 #  - &fluid predictor_tolerance out of range is refused naming the variable;
 #  - a restart continues bodies_loads.dat bit for bit.
@@ -58,10 +58,10 @@ PY
     else
       echo "FAIL immersed_cn_runs/${coupling}_one_and_two_ranks_equal: $(head -c 400 cmp.txt)"
     fi
-    if grep -q 'immersed boundary: hypre iterations [0-9]*, residual' two_$coupling.nml.out; then
-      echo "PASS immersed_cn_runs/${coupling}_log_names_iterations  ($(grep 'hypre iterations' two_$coupling.nml.out | tail -n 1 | head -c 160))"
+    if grep -q 'immersed boundary: Krylov iterations [0-9]*, residual' two_$coupling.nml.out; then
+      echo "PASS immersed_cn_runs/${coupling}_log_names_iterations  ($(grep 'Krylov iterations' two_$coupling.nml.out | tail -n 1 | head -c 160))"
     else
-      echo "FAIL immersed_cn_runs/${coupling}_log_names_iterations: no hypre iterations line in the log"
+      echo "FAIL immersed_cn_runs/${coupling}_log_names_iterations: no Krylov iterations line in the log"
     fi
   else
     echo "FAIL immersed_cn_runs/${coupling}_one_and_two_ranks_equal: a run failed: $(tail -n 3 ./*_$coupling.nml.out | head -c 400)"
