@@ -150,6 +150,13 @@ contains
     if (cfg%scene%fluid /= 'resolved' .and. cfg%scene%particle_substeps /= 1) call input_error('scene', &
         'particle_substeps', int_text(cfg%scene%particle_substeps)//' with fluid = '''//trim(cfg%scene%fluid)//'''', &
         '1 (sub-steps split a fluid step; without a resolved fluid set &run dt itself)')
+    if (cfg%scene%substep_bodies == 'near' .and. .not. (cfg%scene%fluid == 'resolved' .and. &
+        cfg%scene%particles == 'suspension' .and. cfg%scene%particle_coupling == 'point')) &
+      call input_error('scene', 'substep_bodies', '''near'' with fluid = '''//trim(cfg%scene%fluid)// &
+          ''', particles = '''//trim(cfg%scene%particles)//''', particle_coupling = '''// &
+          trim(cfg%scene%particle_coupling)//'''', '''all'' (''near'' needs fluid = ''resolved'', particles = '// &
+          '''suspension'' and particle_coupling = ''point'': the one-step update of the other bodies is the '// &
+          'point particle''s)')
   end subroutine check_scene_combinations
 
   !> The pair in the resolved fluid: the immersed-boundary coupling ('resolved') imposes the bodies
