@@ -12,6 +12,7 @@ module point_hydrodynamics
                                      point_fluid_at, point_body_loads, sample_start, sample_end, point_free_step
   use particle_hydrodynamics, only: particle_hydrodynamics_t
   use rigid_body, only: added_inertia_t
+  use timer_registry, only: timer_tic, timer_toc
   implicit none
   private
   public :: point_hydrodynamics_t, point_hydrodynamics_create
@@ -55,9 +56,13 @@ contains
     type(forcing_driver_t), intent(inout) :: forcing
     type(particle_system_t), intent(in) :: system
     real(wp), intent(in) :: dt
+    call timer_tic('point sampling')
     call point_coupling_sample(self%coupling, solver%grid, solver%u, solver%v, solver%w, system%bodies, sample_start)
+    call timer_toc('point sampling')
     call forced_fluid_advance(forcing, solver, dt)
+    call timer_tic('point sampling')
     call point_coupling_sample(self%coupling, solver%grid, solver%u, solver%v, solver%w, system%bodies, sample_end, dt)
+    call timer_toc('point sampling')
   end subroutine point_fluid_step
 
   subroutine point_loads(self, system, theta, loads)
