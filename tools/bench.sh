@@ -95,7 +95,8 @@ fi
 # near-body search, the one-step update and the sub-steps of the near bodies inside the particle
 # stage), per body, on 1 and 2 ranks; &scene substep_bodies = 'near' for N = 10^3, 10^4, 10^5 and
 # 'all' for 10^3, 10^4 (10^5 bodies all sub-stepped take tens of seconds per fluid step). Means
-# over the 3 steps, slowest rank; the fitted exponent of the overhead against N (near rows).
+# over the 3 steps (the free and the coupled step of the slowest rank, the stages mean over ranks);
+# the fitted exponent of the particle work against N (near rows).
 if [[ $parts == *point* ]]; then
   deck=$PWD/tools/bench/decks/suspension_point_bench.nml
   echo

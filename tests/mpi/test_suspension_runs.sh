@@ -17,14 +17,16 @@
 #    fluid steps positions within 2e-3 of the largest distance travelled, velocities within 1e-3 of
 #    the largest, quaternions within 1e-5 (measured 5e-4, 1.4e-4, 9e-7: the 10 explicit Euler
 #    sub-steps' own error against the exact relaxation, and the orientation and gradient the
-#    one-step update holds over the step), no miss logged;
+#    one-step update holds over the step), no miss logged; 2 fluid steps + &run restart to 4 give
+#    the 4-step particles.h5 and checkpoint bit for bit (the near bodies are found again from the
+#    restored state);
 #  - ghost mode (&suspension ghost): 191 spheres at 10%, 20 mm/s rms, 4000 steps: every body's
 #    velocity unchanged (bit for bit: no impulse, no DLVO), so the momentum is the start's; bodies
 #    pass through each other (a negative gap logged); the collisions counted are exactly the
 #    encounters an independent count finds on the straight-line trajectories x0 + v t (each pair's
 #    steps with 0 <= gap < v_n dt at the minimum image, v_n the normal approach speed), pair by pair.
 # Prints PASS/FAIL lines; works in a temporary directory.
-# checks: 9
+# checks: 10
 set -u
 AGGLO=${AGGLO:?AGGLO must be the agglo executable}
 root=$(cd "$(dirname "$0")/../.." && pwd)
@@ -118,6 +120,15 @@ try:
 except Exception as error:
     print(f'FAIL suspension/point_near_substeps_match_all: {error}')
 PY
+
+mpirun -np 1 "$AGGLO" point.nml --set "output.directory='nearsplit'" --set "scene.substep_bodies='near'" \
+  --set run.max_steps=2 > near1.out 2>&1
+mpirun -np 1 "$AGGLO" point.nml --set "output.directory='nearsplit'" --set "scene.substep_bodies='near'" \
+  --set run.restart=.true. > near2.out 2>&1
+if h5diff -q near/particles.h5 nearsplit/particles.h5 && \
+   h5diff -q near/checkpoints/checkpoint_0000000004.h5 nearsplit/checkpoints/checkpoint_0000000004.h5; then
+  echo "PASS suspension/point_near_restart_bit_for_bit  (2 + 2 fluid steps: particles.h5 and the last checkpoint)"
+else echo "FAIL suspension/point_near_restart_bit_for_bit: $(grep -m1 error near2.out)"; fi
 
 # --- ghost mode ---
 "$AGGLO" "$deck" --set run.max_steps=4000 --set run.end_time=1.0 --set suspension.ghost=.true. \
