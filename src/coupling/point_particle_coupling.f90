@@ -32,7 +32,7 @@ module point_particle_coupling
   use stokes_resistance, only: stokes_resistance_t, stokes_resistance_of, stokes_loads_lab, &
                                spheroid_added_mass_coefficients
   use fluid_grid, only: fluid_grid_t
-  use field_interpolation, only: on_x_faces, on_y_faces, on_z_faces, interpolate_at_points, velocity_gradient_at_points
+  use field_interpolation, only: velocity_and_gradient_at_points
   implicit none
   private
   public :: point_coupling_t, point_fluid_t, point_coupling_create, point_coupling_sample, point_fluid_at, &
@@ -125,19 +125,13 @@ contains
     real(wp), intent(in) :: points(:, :)            !< (3, n)
     real(wp), intent(out) :: velocity(:, :)         !< (3, n) m/s
     real(wp), intent(out) :: gradient(:, :, :)      !< (3, 3, n) 1/s
-    real(wp), allocatable :: values(:), sorted(:, :), sorted_gradient(:, :, :)
+    real(wp), allocatable :: sorted(:, :), sorted_velocity(:, :), sorted_gradient(:, :, :)
     integer, allocatable :: order(:)
-    allocate(values(size(points, 2)), order(size(points, 2)))
+    allocate(order(size(points, 2)), sorted_velocity(3, size(points, 2)), sorted_gradient(3, 3, size(points, 2)))
     call row_order(grid, points, order)
     sorted = points(:, order)
-    call interpolate_at_points(grid, u, on_x_faces, sorted, values)
-    velocity(1, order) = values
-    call interpolate_at_points(grid, v, on_y_faces, sorted, values)
-    velocity(2, order) = values
-    call interpolate_at_points(grid, w, on_z_faces, sorted, values)
-    velocity(3, order) = values
-    allocate(sorted_gradient(3, 3, size(points, 2)))
-    call velocity_gradient_at_points(grid, u, v, w, sorted, sorted_gradient)
+    call velocity_and_gradient_at_points(grid, u, v, w, sorted, sorted_velocity, sorted_gradient)
+    velocity(:, order) = sorted_velocity
     gradient(:, :, order) = sorted_gradient
   end subroutine sample_velocity
 
