@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# checks: 13
+# checks: 14
 # Bad &suspension decks (&scene particles = 'suspension'; docs/decks.md, &suspension) are refused
 # with the group, the variable, the value and what is allowed: before anything runs for the
 # values and their combinations; at the placement, before any body is allocated, for
@@ -60,3 +60,10 @@ expect_deck_error substep_bodies_unknown 1 "&run name = 's', end_time = 1.0e-6, 
 &scene fluid = 'none', particles = 'suspension', substep_bodies = 'some' /
 &pair density = 2710.0 /
 &suspension count = 4 /" "&scene substep_bodies = 'some' is not allowed; allowed: one of 'all' | 'near'"
+expect_deck_error near_substeps_rows_between_fluid_steps 1 "&run name = 's', end_time = 1.0e-6, dt = 1.0e-5, overwrite = .true. /
+&scene fluid = 'resolved', particles = 'suspension', particle_coupling = 'point', particle_substeps = 10,
+       substep_bodies = 'near' /
+&grid nx = 16, ny = 16, nz = 16 /
+&pair density = 2710.0 /
+&suspension count = 4 /
+&output particle_interval = 15 /" "&output particle_interval = 15 (or stats_interval when 0) with &scene substep_bodies = 'near' is not allowed; allowed: a multiple of &scene particle_substeps = 10"
