@@ -281,7 +281,16 @@ contains
       if (sliced) then
         index(j) = m0 + j - 1 - offset
       else
-        index(j) = modulo(m0 + j - 2, n) + 1
+        ! modulo(m0 + j - 2, n) + 1 for m0 + j - 2 in [-n, 2n) (s in [0, L): m0 in [-1, n]),
+        ! without an integer division (the inner loop of every point sample).
+        index(j) = m0 + j - 2
+        if (index(j) < 0) then
+          index(j) = index(j) + n
+        else if (index(j) >= n) then
+          index(j) = index(j) - n
+        end if
+        if (index(j) < 0 .or. index(j) >= n) index(j) = modulo(m0 + j - 2, n)
+        index(j) = index(j) + 1
       end if
     end do
     if (sliced) then
