@@ -16,6 +16,9 @@
 !>   particle sub-steps (with particles): &scene particle_substeps steps of dt / particle_substeps,
 !>                each one particle_system_step under the provider's loads (Newton-Euler, closest
 !>                points, collisions, DLVO: the interaction), then the pair's events and samples;
+!>                with &scene substep_bodies = 'near' only the bodies of the pairs that may come near
+!>                in the fluid step (module near_bodies), the others first in one update of the
+!>                provider over the whole step (single_step; docs/theory.md, "Near-pair sub-steps");
 !>   end rule     &run end_time, max_steps, and the pair's (twice the first collision, 'settled');
 !>   progress, field outputs (&output field_interval), checkpoint (&output checkpoint_interval).
 !> Without a fluid (&scene fluid = 'none' or 'stokes') the same loop runs with no fluid stages and
