@@ -56,7 +56,7 @@ module scene_loop
   use pair_setup, only: pair_t, build_pair
   use particle_system, only: particle_system_t, particle_loads_t, particle_system_interact, particle_system_step, &
                              particle_system_set_added_inertia, particle_loads_zero, particle_system_set_members, &
-                             particle_search_gap
+                             particle_search_gap, particle_system_all_members
   use near_bodies, only: near_bodies_t, near_bodies_find
   use point_particle_coupling, only: sample_start, sample_end
   use pair_outcome, only: pair_outcome_rules_t, pair_outcome_rules_of
@@ -298,6 +298,7 @@ contains
         ! The bodies of the pairs that may come near take the sub-steps; the others the whole
         ! step in one update (module near_bodies; docs/theory.md, "Near-pair sub-steps").
         call timer_tic('near-body search')
+        call particle_system_all_members(system)   ! the search gap from every body's speed
         call near_bodies_find(near, system, hydrodynamics%centre_fluid_velocity(sample_start), &
                               hydrodynamics%centre_fluid_velocity(sample_end), dt, particle_search_gap(system, dt_particle))
         call particle_system_set_members(system, near%members(1:near%count))

@@ -34,7 +34,8 @@ program test_near_substeps
   use particle_system, only: particle_models_t, particle_loads_t, particle_system_t, particle_system_create, &
                              particle_system_interact, particle_system_step, particle_loads_zero, &
                              particle_system_set_added_inertia, particle_system_set_members, particle_search_gap, &
-                             particle_interaction_gap, wrap_body, unwrapped_position
+                             particle_interaction_gap, wrap_body, unwrapped_position, &
+                             particle_system_all_members
   use near_bodies, only: near_bodies_t, near_bodies_find
   use point_particle_coupling, only: point_coupling_t, point_coupling_create, point_fluid_at, point_body_loads, &
                                      point_free_step
@@ -130,6 +131,7 @@ contains
       t = (step - 1) * dt
       call sample(coupling, system, t)
       if (near_only) then
+        call particle_system_all_members(system)
         call near_bodies_find(finder, system, coupling%velocity(:, :, 1), coupling%velocity(:, :, 2), dt, &
                               particle_search_gap(system, dtp))
         call particle_system_set_members(system, finder%members(1:finder%count))
