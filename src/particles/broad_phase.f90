@@ -107,7 +107,7 @@ contains
     real(wp), intent(in) :: positions(:,:), radii(:), box_length(3), gap
     real(wp) :: width_min, origin(3), extent(3), width(3), scale, total
     integer :: n, k, i, j, c, ncells, count_i, offsets(3, 3), noffsets(3), a, b, d, cell(3)
-    integer :: neighbour_cells(27), nneighbours, m
+    integer :: neighbour_cells(27), nneighbours, m, linear_offsets(27), nlinear
     logical :: inside
     n = size(radii)
     finder%count = 0
@@ -178,20 +178,42 @@ contains
       finder%next(i) = finder%head(c)
       finder%head(c) = i
     end do
-    do i = 1, n - 1
-      ! The distinct neighbour cells of body i's cell.
-      nneighbours = 0
-      do a = 1, noffsets(1)
-        do b = 1, noffsets(2)
-          do d = 1, noffsets(3)
-            cell = finder%cell_of(:, i) + [offsets(a, 1), offsets(b, 2), offsets(d, 3)]
-            call wrap_cell(cell, finder%cells, box_length, inside)
-            if (.not. inside) cycle
-            nneighbours = nneighbours + 1
-            neighbour_cells(nneighbours) = linear_cell(cell, finder%cells)
+    ! Linear offsets of the 27 neighbours of a cell that is at least one cell from every edge (no
+    ! wrap needed): most cells of a large system.
+    nlinear = 0
+    if (all(noffsets == 3)) then
+      do a = -1, 1
+        do b = -1, 1
+          do d = -1, 1
+            nlinear = nlinear + 1
+            linear_offsets(nlinear) = a + finder%cells(1) * (b + finder%cells(2) * d)
           end do
         end do
       end do
+    end if
+    do i = 1, n - 1
+      ! The distinct neighbour cells of body i's cell.
+      nneighbours = 0
+      if (nlinear == 27) then
+        if (all(finder%cell_of(:, i) >= 1 .and. finder%cell_of(:, i) <= finder%cells - 2)) then
+          c = linear_cell(finder%cell_of(:, i), finder%cells)
+          neighbour_cells = c + linear_offsets
+          nneighbours = 27
+        end if
+      end if
+      if (nneighbours == 0) then
+        do a = 1, noffsets(1)
+          do b = 1, noffsets(2)
+            do d = 1, noffsets(3)
+              cell = finder%cell_of(:, i) + [offsets(a, 1), offsets(b, 2), offsets(d, 3)]
+              call wrap_cell(cell, finder%cells, box_length, inside)
+              if (.not. inside) cycle
+              nneighbours = nneighbours + 1
+              neighbour_cells(nneighbours) = linear_cell(cell, finder%cells)
+            end do
+          end do
+        end do
+      end if
       count_i = 0
       do m = 1, nneighbours
         j = finder%head(neighbour_cells(m))
