@@ -3,7 +3,8 @@
 # ranks, and the Poisson solve against one forward + inverse 3-D FFT of the same grid; the staged
 # step against the fused one with each stage against the memory-bandwidth floor (BENCH_PARTS=stages);
 # the coupled step with immersed bodies against the fluid-only step, by part and against the number
-# of bodies (BENCH_PARTS=immersed).
+# of bodies (BENCH_PARTS=immersed); the coupled step with 10^3 to 10^5 point particles against the
+# particle-free step, by stage (BENCH_PARTS=point).
 # Medians over repetitions (the machine may be shared: compare ratios; poisson = the in-buffer solve
 # the step uses, pois(copy) = the poisson_solve API with its copies in and out). Results: docs/studies/performance.md.
 set -eu
@@ -20,7 +21,7 @@ forcing_exe=$BUILD/bench/bench_forcing
 stages_exe=$BUILD/bench/bench_stages
 immersed_exe=$BUILD/bench/bench_immersed
 agglo=$BUILD/agglo
-parts=${BENCH_PARTS:-fluid stages pair forcing immersed}   # e.g. BENCH_PARTS=pair make bench
+parts=${BENCH_PARTS:-fluid stages pair forcing immersed point}   # e.g. BENCH_PARTS=pair make bench
 echo "Agglo fluid benchmark on $(nproc) cores: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')"
 echo "compiler: $(mpifort --version | head -n 1); flags: $(cat "$BUILD/flags.txt" 2>/dev/null); FFTW_ESTIMATE plans"
 if [[ $parts == *fluid* ]]; then
@@ -99,6 +100,47 @@ if [[ $parts == *immersed* ]]; then
   for level in 1 2 3; do   # the ghost nodes on the icosphere (&bodies geometry = 'mesh')
     (cd "$work" && mpirun -np 1 "$immersed_exe" 128 10 2 implicit cpu $level)
   done
+fi
+
+# Point particles, many (&scene particles = 'suspension', particle_coupling = 'point';
+# tools/bench/decks/suspension_point_bench.nml: calcite spheres of radius 2.5 um, 128^3, 3 fluid
+# steps from a random field, 200 sub-steps): the coupled step against the particle-free step of the
+# same deck, by stage (the sampling of the fluid at the centres inside the fluid step; the
+# near-body search, the one-step update and the sub-steps of the near bodies inside the particle
+# stage), per body, on 1 and 2 ranks; &scene substep_bodies = 'near' for N = 10^3, 10^4, 10^5 and
+# 'all' for 10^3, 10^4 (10^5 bodies all sub-stepped take tens of seconds per fluid step). Means
+# over the 3 steps (the free and the coupled step of the slowest rank, the stages mean over ranks);
+# the fitted exponent of the particle work against N (near rows).
+if [[ $parts == *point* ]]; then
+  deck=$PWD/tools/bench/decks/suspension_point_bench.nml
+  echo
+  echo "Point particles:  N  R  mode   free_ms coupled_ms  ratio   work/free  sample  search  update substep  [ms/step]  us/body"
+  : > "$work/point_rows.txt"
+  for ranks in 1 2; do
+    free=$(cd "$work" && mpirun -np $ranks "$agglo" "$deck" --set "scene.particles='none'" --set scene.added_mass=.false. \
+           --set "run.name='free_$ranks'" | awk '/^  fluid step /{print $5}')
+    for n in 1000 10000 100000; do
+      for mode in near all; do
+        [[ $mode == all && $n == 100000 ]] && continue
+        (cd "$work" && mpirun -np $ranks "$agglo" "$deck" --set suspension.count=$n --set "scene.substep_bodies='$mode'" \
+           --set "run.name='point_${n}_${ranks}_$mode'") > "$work/point.log"
+        # work: what the particles add to the particle-free step (the sampling inside the fluid step
+        # and the particle stage), measured in the coupled run itself (robust on a shared machine).
+        awk -v n=$n -v r=$ranks -v mode=$mode -v free="$free" '
+          /^  fluid step /{fluid=$5} /^  particle sub-steps /{part=$5} /^  point sampling /{sample=$4}
+          /^  near-body search /{search=$4} /^  one-step update /{update=$4}; /^  particle sub-steps /{partmean=$4}
+          END { coupled = fluid + part; work = sample + part
+                printf "  %15d %2d %5s %9.1f %9.1f %6.2f %9.3f %8.1f %7.1f %7.1f %7.1f  %18.3f\n", n, r, mode, free, \
+                  coupled, coupled / free, work / free, sample, search, update, partmean - search - update, \
+                  work * 1000 / n }' "$work/point.log" | tee -a "$work/point_rows.txt"
+      done
+    done
+  done
+  # Least-squares slope of log(work) against log(N), per rank count, 'near' rows.
+  awk '$3 == "near" { k = $2; x = log($1); y = log($7 * $4); sx[k] += x; sy[k] += y; sxx[k] += x * x;
+                                 sxy[k] += x * y; m[k]++ }
+       END { for (k in m) printf "  fitted exponent of the particle work against N, %d rank(s): %.2f\n", k,
+                                  (m[k] * sxy[k] - sx[k] * sy[k]) / (m[k] * sxx[k] - sx[k] * sx[k]) }' "$work/point_rows.txt"
 fi
 
 [[ $parts == *pair* ]] || exit 0

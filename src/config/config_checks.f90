@@ -116,6 +116,7 @@ contains
   !> first message names the real conflict (e.g. forcing in a pair deck), not a consequence of it.
   subroutine check_scene_combinations(cfg)
     type(agglo_config_t), intent(in) :: cfg
+    integer :: interval
     if (cfg%scene%forcing /= 'none' .and. cfg%scene%fluid /= 'resolved') call input_error('scene', 'forcing', &
         ''''//trim(cfg%scene%forcing)//''' with fluid = '''//trim(cfg%scene%fluid)//'''', '''none'' unless '// &
         'fluid = ''resolved'' (the forcing drives the resolved fluid; a fluid-free or Stokes scene has no '// &
@@ -150,6 +151,23 @@ contains
     if (cfg%scene%fluid /= 'resolved' .and. cfg%scene%particle_substeps /= 1) call input_error('scene', &
         'particle_substeps', int_text(cfg%scene%particle_substeps)//' with fluid = '''//trim(cfg%scene%fluid)//'''', &
         '1 (sub-steps split a fluid step; without a resolved fluid set &run dt itself)')
+    if (cfg%scene%substep_bodies == 'near' .and. .not. (cfg%scene%fluid == 'resolved' .and. &
+        cfg%scene%particles == 'suspension' .and. cfg%scene%particle_coupling == 'point')) &
+      call input_error('scene', 'substep_bodies', '''near'' with fluid = '''//trim(cfg%scene%fluid)// &
+          ''', particles = '''//trim(cfg%scene%particles)//''', particle_coupling = '''// &
+          trim(cfg%scene%particle_coupling)//'''', '''all'' (''near'' needs fluid = ''resolved'', particles = '// &
+          '''suspension'' and particle_coupling = ''point'': the one-step update of the other bodies is the '// &
+          'point particle''s)')
+    ! With 'near' the bodies of the one-step update are at the fluid step's end from its start on:
+    ! a particles.h5 row belongs on a fluid-step boundary.
+    if (cfg%scene%substep_bodies == 'near') then
+      interval = cfg%output%particle_interval
+      if (interval == 0) interval = cfg%output%stats_interval
+      if (mod(interval, cfg%scene%particle_substeps) /= 0) call input_error('output', 'particle_interval', &
+          int_text(interval)//' (or stats_interval when 0) with &scene substep_bodies = ''near''', &
+          'a multiple of &scene particle_substeps = '//int_text(cfg%scene%particle_substeps)// &
+          ' (rows on fluid-step boundaries, where every body is at the same time)')
+    end if
   end subroutine check_scene_combinations
 
   !> The pair in the resolved fluid: the immersed-boundary coupling ('resolved') imposes the bodies

@@ -23,13 +23,18 @@ module config_scene
     logical :: added_mass = .false.               !< particle_coupling = 'point': implicit added-mass term
     !> particle_coupling = 'resolved', explicit diffusion: the stabilisation's history estimate
     logical :: added_mass_history = .false.
+    !> Which bodies take the particle sub-steps: 'all' | 'near' (particle_coupling = 'point', a
+    !> suspension: only the bodies of the pairs that may come within the interaction gap in this fluid
+    !> step; the others take the fluid step in one exact exponential update, module point_free_step)
+    character(len=8) :: substep_bodies = 'all'
   end type scene_config_t
 
   character(len=16) :: fluid, particles, forcing, ibm_coupling, particle_coupling
+  character(len=8) :: substep_bodies
   logical :: dlvo, collisions, added_mass, added_mass_history
   integer :: particle_substeps
   namelist /scene/ fluid, particles, forcing, ibm_coupling, dlvo, collisions, particle_substeps, particle_coupling, &
-                   added_mass, added_mass_history
+                   added_mass, added_mass_history, substep_bodies
 
 contains
 
@@ -38,6 +43,7 @@ contains
     fluid = cfg%fluid; particles = cfg%particles; forcing = cfg%forcing; ibm_coupling = cfg%ibm_coupling
     dlvo = cfg%dlvo; collisions = cfg%collisions; particle_substeps = cfg%particle_substeps
     particle_coupling = cfg%particle_coupling; added_mass = cfg%added_mass; added_mass_history = cfg%added_mass_history
+    substep_bodies = cfg%substep_bodies
   end subroutine to_namelist
 
   subroutine from_namelist(cfg)
@@ -45,6 +51,7 @@ contains
     cfg%fluid = fluid; cfg%particles = particles; cfg%forcing = forcing; cfg%ibm_coupling = ibm_coupling
     cfg%dlvo = dlvo; cfg%collisions = collisions; cfg%particle_substeps = particle_substeps
     cfg%particle_coupling = particle_coupling; cfg%added_mass = added_mass; cfg%added_mass_history = added_mass_history
+    cfg%substep_bodies = substep_bodies
   end subroutine from_namelist
 
   subroutine read_scene_group(deck, cfg)
@@ -67,6 +74,7 @@ contains
     call require_option('scene', 'ibm_coupling', cfg%ibm_coupling, [character(len=8) :: 'implicit', 'explicit'])
     call require_positive_int('scene', 'particle_substeps', cfg%particle_substeps)
     call require_option('scene', 'particle_coupling', cfg%particle_coupling, [character(len=8) :: 'point', 'resolved'])
+    call require_option('scene', 'substep_bodies', cfg%substep_bodies, [character(len=4) :: 'all', 'near'])
   end subroutine check_scene_group
 
   subroutine write_scene_group(unit, cfg)

@@ -22,6 +22,7 @@ module particle_hydrodynamics
   use fluid_solver, only: fluid_solver_t
   use forcing_driver, only: forcing_driver_t, forced_fluid_advance
   use particle_system, only: particle_system_t, particle_loads_t
+  use error_handling, only: fatal
   use rigid_body, only: added_inertia_t
   use checkpoint_files, only: checkpoint_t
   use body_surface_output, only: body_pose_t, system_body_poses
@@ -60,6 +61,13 @@ module particle_hydrodynamics
     procedure :: body_poses => system_poses
     !> Close the provider's outputs and log its summary at the end of a run (collective).
     procedure :: finish => no_finish
+    !> &scene substep_bodies = 'near' (module near_bodies): the loads of the listed bodies only (by
+    !> default every body's), the one-step update of the fluid step for bodies with no pair force,
+    !> and the fluid velocity at the centres at the start and the end of the last fluid step (3, n).
+    !> Only the point provider has the last two.
+    procedure :: member_loads => every_body_loads
+    procedure :: single_step => no_single_step
+    procedure :: centre_fluid_velocity => no_centre_fluid_velocity
   end type particle_hydrodynamics_t
 
   abstract interface
@@ -135,4 +143,29 @@ contains
     type(fluid_solver_t), intent(in) :: solver
     integer(i8), intent(in) :: steps          !< fluid steps of this run segment
   end subroutine no_finish
+
+  subroutine every_body_loads(self, system, theta, members, loads)
+    class(particle_hydrodynamics_t), intent(in) :: self
+    type(particle_system_t), intent(in) :: system
+    real(wp), intent(in) :: theta
+    integer, intent(in) :: members(:)
+    type(particle_loads_t), intent(inout) :: loads
+    call self%loads(system, theta, loads)
+  end subroutine every_body_loads
+
+  subroutine no_single_step(self, system, bodies, dt)
+    class(particle_hydrodynamics_t), intent(in) :: self
+    type(particle_system_t), intent(inout) :: system
+    integer, intent(in) :: bodies(:)
+    real(wp), intent(in) :: dt
+    call fatal('particle hydrodynamics: this coupling has no one-step update (&scene substep_bodies = ''near'')')
+  end subroutine no_single_step
+
+  function no_centre_fluid_velocity(self, which) result(velocity)
+    class(particle_hydrodynamics_t), intent(in) :: self
+    integer, intent(in) :: which
+    real(wp), allocatable :: velocity(:,:)
+    allocate(velocity(3, 0))
+    call fatal('particle hydrodynamics: this coupling samples no fluid at the centres (&scene substep_bodies = ''near'')')
+  end function no_centre_fluid_velocity
 end module particle_hydrodynamics

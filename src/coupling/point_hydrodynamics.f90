@@ -7,11 +7,12 @@ module point_hydrodynamics
   use agglo_kinds, only: wp
   use fluid_solver, only: fluid_solver_t
   use forcing_driver, only: forcing_driver_t, forced_fluid_advance
-  use particle_system, only: particle_system_t, particle_loads_t
+  use particle_system, only: particle_system_t, particle_loads_t, wrap_body
   use point_particle_coupling, only: point_coupling_t, point_fluid_t, point_coupling_create, point_coupling_sample, &
-                                     point_fluid_at, point_body_loads, sample_start, sample_end
+                                     point_fluid_at, point_body_loads, sample_start, sample_end, point_free_step
   use particle_hydrodynamics, only: particle_hydrodynamics_t
   use rigid_body, only: added_inertia_t
+  use timer_registry, only: timer_tic, timer_toc
   implicit none
   private
   public :: point_hydrodynamics_t, point_hydrodynamics_create
@@ -23,6 +24,9 @@ module point_hydrodynamics
     procedure :: fluid_step => point_fluid_step
     procedure :: loads => point_loads
     procedure :: impulse_inertia => point_impulse_inertia
+    procedure :: member_loads => point_member_loads
+    procedure :: single_step => point_single_step
+    procedure :: centre_fluid_velocity => point_centre_fluid_velocity
   end type point_hydrodynamics_t
 
 contains
@@ -52,9 +56,13 @@ contains
     type(forcing_driver_t), intent(inout) :: forcing
     type(particle_system_t), intent(in) :: system
     real(wp), intent(in) :: dt
+    call timer_tic('point sampling')
     call point_coupling_sample(self%coupling, solver%grid, solver%u, solver%v, solver%w, system%bodies, sample_start)
+    call timer_toc('point sampling')
     call forced_fluid_advance(forcing, solver, dt)
+    call timer_tic('point sampling')
     call point_coupling_sample(self%coupling, solver%grid, solver%u, solver%v, solver%w, system%bodies, sample_end, dt)
+    call timer_toc('point sampling')
   end subroutine point_fluid_step
 
   subroutine point_loads(self, system, theta, loads)
@@ -84,4 +92,42 @@ contains
       added(i)%mass = self%coupling%added_mass(:, i)
     end do
   end function point_impulse_inertia
+
+  !> point_loads for the members only (the others' loads are not touched).
+  subroutine point_member_loads(self, system, theta, members, loads)
+    class(point_hydrodynamics_t), intent(in) :: self
+    type(particle_system_t), intent(in) :: system
+    real(wp), intent(in) :: theta
+    integer, intent(in) :: members(:)
+    type(particle_loads_t), intent(inout) :: loads
+    type(point_fluid_t) :: fluid
+    integer :: i, k
+    do k = 1, size(members)
+      i = members(k)
+      fluid = point_fluid_at(self%coupling, i, system%bodies(i)%position, theta)
+      call point_body_loads(self%coupling, i, system%bodies(i), fluid, system%dlvo_loads%force(:, i), &
+                            loads%force(:, i), loads%torque(:, i))
+    end do
+  end subroutine point_member_loads
+
+  !> The listed bodies over the whole last fluid step dt in one exact exponential update
+  !> (point_free_step), positions wrapped into the box.
+  subroutine point_single_step(self, system, bodies, dt)
+    class(point_hydrodynamics_t), intent(in) :: self
+    type(particle_system_t), intent(inout) :: system
+    integer, intent(in) :: bodies(:)
+    real(wp), intent(in) :: dt
+    integer :: k
+    do k = 1, size(bodies)
+      call point_free_step(self%coupling, bodies(k), system%bodies(bodies(k)), dt)
+      call wrap_body(system, bodies(k))
+    end do
+  end subroutine point_single_step
+
+  function point_centre_fluid_velocity(self, which) result(velocity)
+    class(point_hydrodynamics_t), intent(in) :: self
+    integer, intent(in) :: which
+    real(wp), allocatable :: velocity(:,:)
+    velocity = self%coupling%velocity(:, :, which)
+  end function point_centre_fluid_velocity
 end module point_hydrodynamics

@@ -26,16 +26,17 @@ module point_particle_coupling
   use error_handling, only: fatal
   use spheroid, only: spheroid_t
   use rigid_body, only: rigid_body_t, angular_velocity_lab
-  use quaternion, only: rotation_matrix
+  use quaternion, only: rotation_matrix, quaternion_advance
+  use vector_algebra, only: cross
   use periodic_box, only: minimum_image
   use stokes_resistance, only: stokes_resistance_t, stokes_resistance_of, stokes_loads_lab, &
                                spheroid_added_mass_coefficients
   use fluid_grid, only: fluid_grid_t
-  use field_interpolation, only: on_x_faces, on_y_faces, on_z_faces, interpolate_at_points, velocity_gradient_at_points
+  use field_interpolation, only: velocity_and_gradient_at_points
   implicit none
   private
   public :: point_coupling_t, point_fluid_t, point_coupling_create, point_coupling_sample, point_fluid_at, &
-            point_body_loads, local_rotation, sample_velocity, sample_start, sample_end
+            point_body_loads, local_rotation, sample_velocity, sample_start, sample_end, point_free_step
 
   !> Which end of the fluid step a sample belongs to.
   integer, parameter :: sample_start = 1, sample_end = 2
@@ -115,22 +116,50 @@ contains
 
   !> The velocity and its gradient G(a, b) = d u_a / d x_b at points (m), on every rank
   !> (collective; u, v, w with current halos): field_interpolation's trilinear value and centred
-  !> gradient, which give the same result on any number of ranks.
+  !> gradient, which give the same result on any number of ranks. The points are visited in the
+  !> order of their grid rows (row_order), so that the stencils of consecutive points share cache
+  !> lines; each point's arithmetic is that of any order.
   subroutine sample_velocity(grid, u, v, w, points, velocity, gradient)
     type(fluid_grid_t), intent(in) :: grid
     real(wp), intent(in) :: u(0:, 0:, 0:), v(0:, 0:, 0:), w(0:, 0:, 0:)
     real(wp), intent(in) :: points(:, :)            !< (3, n)
     real(wp), intent(out) :: velocity(:, :)         !< (3, n) m/s
     real(wp), intent(out) :: gradient(:, :, :)      !< (3, 3, n) 1/s
-    real(wp) :: values(size(points, 2))
-    call interpolate_at_points(grid, u, on_x_faces, points, values)
-    velocity(1, :) = values
-    call interpolate_at_points(grid, v, on_y_faces, points, values)
-    velocity(2, :) = values
-    call interpolate_at_points(grid, w, on_z_faces, points, values)
-    velocity(3, :) = values
-    call velocity_gradient_at_points(grid, u, v, w, points, gradient)
+    real(wp), allocatable :: sorted(:, :), sorted_velocity(:, :), sorted_gradient(:, :, :)
+    integer, allocatable :: order(:)
+    allocate(order(size(points, 2)), sorted_velocity(3, size(points, 2)), sorted_gradient(3, 3, size(points, 2)))
+    call row_order(grid, points, order)
+    sorted = points(:, order)
+    call velocity_and_gradient_at_points(grid, u, v, w, sorted, sorted_velocity, sorted_gradient)
+    velocity(:, order) = sorted_velocity
+    gradient(:, :, order) = sorted_gradient
   end subroutine sample_velocity
+
+  !> The points ordered by their grid row (the z plane, then the y row, of the cell that holds
+  !> them; in the input order within a row): a counting sort, O(n + nz ny).
+  subroutine row_order(grid, points, order)
+    type(fluid_grid_t), intent(in) :: grid
+    real(wp), intent(in) :: points(:, :)
+    integer, intent(out) :: order(:)
+    integer, allocatable :: row(:), first(:)
+    integer :: p, j, k, r
+    allocate(row(size(points, 2)), first(grid%ny * grid%nz + 1))
+    first = 0
+    do p = 1, size(points, 2)
+      j = min(grid%ny - 1, max(0, floor(modulo(points(2, p), grid%ly) / grid%dy)))
+      k = min(grid%nz - 1, max(0, floor(modulo(points(3, p), grid%lz) / grid%dz)))
+      row(p) = 1 + j + grid%ny * k
+      first(row(p) + 1) = first(row(p) + 1) + 1
+    end do
+    first(1) = 1
+    do r = 2, size(first)
+      first(r) = first(r) + first(r - 1)
+    end do
+    do p = 1, size(points, 2)
+      order(first(row(p))) = p
+      first(row(p)) = first(row(p)) + 1
+    end do
+  end subroutine row_order
 
   !> The undisturbed flow at position (m) at the fraction theta in [0, 1] of the sampled fluid step,
   !> for body i (module header). Without an end sample (dt = 0) the start sample is frozen.
@@ -188,4 +217,72 @@ contains
                         / (body%mass + coupling%added_mass(:, i))
     force = body%mass * matmul(rotation, acceleration_body) - other_force
   end subroutine point_body_loads
+
+  !> Body i over the whole sampled fluid step dt in one update, for a body with no pair force
+  !> (docs/theory.md, "Near-pair sub-steps"). Along each body axis j, orientation held over the step,
+  !> the point particle's equation of motion (module header; no DLVO, no contact)
+  !>   (m + m_a,j) dU_j/dt = -zeta_j (U_j - u_j(t)) + (rho_f V + m_a,j) (Du/Dt)_j,
+  !> with the fluid seen by the body u(t) = u_m + b (t - dt/2), u_m and Du/Dt taken at the middle of
+  !> the step (theta = 1/2) at the middle of the body's path and b = Du/Dt (the rate of change of the
+  !> fluid velocity along a path that follows the fluid), is linear with constant coefficients; its
+  !> exact solution with tau_j = (m + m_a,j) / zeta_j,
+  !>   U(t) = V(t) + (U(0) - V(0)) exp(-t / tau),   V(t) = u(t) + (rho_f V + m_a) Du/Dt / zeta - b tau,
+  !>   X(dt) = X(0) + (u_m + (rho_f V + m_a) Du/Dt / zeta - b tau) dt + (U(0) - V(0)) tau (1 - exp(-dt / tau)),
+  !> is the exponential (integrating-factor) integrator of the linear drag, exact for any dt / tau
+  !> (Hochbruck & Ostermann, Acta Numerica 19, 209, 2010; for the Stokes drag of point particles e.g.
+  !> Ireland, Bragg & Collins, J. Fluid Mech. 796, 617, 2016, appendix), so stable and accurate for a
+  !> Stokes response time much shorter than the step. The middle of the path is found by one
+  !> predictor pass (second order in dt). The spin relaxes the same way to the fluid's rotation
+  !> (1/2) curl u with tau_r,j = I_j / zeta_r,j, the gyroscopic term held at its start value; the
+  !> orientation advances with the mean angular velocity over the step.
+  pure subroutine point_free_step(coupling, i, body, dt)
+    type(point_coupling_t), intent(in) :: coupling
+    integer, intent(in) :: i
+    type(rigid_body_t), intent(inout) :: body
+    real(wp), intent(in) :: dt
+    type(point_fluid_t) :: fluid
+    real(wp) :: rotation(3, 3), mass(3), carried(3), tau(3), relax(3), start_velocity(3), rate(3), target(3)
+    real(wp) :: midpoint(3), travel(3), spin0(3), spin_target(3), tau_r(3), relax_r(3), spin_mean(3)
+    integer :: pass
+    rotation = rotation_matrix(body%quaternion)
+    mass = body%mass
+    carried = coupling%fluid_mass(i)
+    if (coupling%with_added_mass) then
+      mass = mass + coupling%added_mass(:, i)
+      carried = carried + coupling%added_mass(:, i)
+    end if
+    tau = mass / coupling%resistance(i)%translational
+    relax = one_minus_exp(dt / tau)
+    start_velocity = matmul(body%velocity, rotation)
+    midpoint = body%position + 0.5_wp * dt * body%velocity
+    do pass = 1, 2
+      fluid = point_fluid_at(coupling, i, midpoint, 0.5_wp)
+      rate = matmul(fluid%acceleration, rotation)
+      ! V at the middle of the step; V(0) = target - b dt / 2.
+      target = matmul(fluid%velocity, rotation) + carried * rate / coupling%resistance(i)%translational - rate * tau
+      travel = target * dt + (start_velocity - (target - 0.5_wp * dt * rate)) * tau * relax
+      midpoint = body%position + 0.5_wp * matmul(rotation, travel)
+    end do
+    body%position = body%position + matmul(rotation, travel)
+    body%velocity = matmul(rotation, target + 0.5_wp * dt * rate &
+                                     + (start_velocity - (target - 0.5_wp * dt * rate)) * (1.0_wp - relax))
+    spin0 = body%angular_velocity_body
+    tau_r = body%inertia_body / coupling%resistance(i)%rotational
+    relax_r = one_minus_exp(dt / tau_r)
+    spin_target = matmul(fluid%angular_velocity, rotation) &
+                  + cross(body%inertia_body * spin0, spin0) / coupling%resistance(i)%rotational
+    spin_mean = spin_target + (spin0 - spin_target) * tau_r * relax_r / dt
+    body%angular_velocity_body = spin_target + (spin0 - spin_target) * (1.0_wp - relax_r)
+    body%quaternion = quaternion_advance(body%quaternion, spin_mean, dt)
+  end subroutine point_free_step
+
+  !> 1 - exp(-h) for h >= 0, without the cancellation of small h (its Taylor series there).
+  elemental real(wp) function one_minus_exp(h)
+    real(wp), intent(in) :: h
+    if (h < 1.0e-4_wp) then
+      one_minus_exp = h * (1.0_wp - h * (0.5_wp - h * (1.0_wp / 6.0_wp - h / 24.0_wp)))
+    else
+      one_minus_exp = 1.0_wp - exp(-h)
+    end if
+  end function one_minus_exp
 end module point_particle_coupling

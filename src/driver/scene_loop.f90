@@ -18,6 +18,9 @@
 !>                points, collisions, DLVO: the interaction), then the pair's events and samples
 !>                and, in a suspension with DLVO, its bonds (module agglomerate_tracking) and the
 !>                rows of clusters.h5 at the times of particles.h5's (module cluster_output);
+!>                with &scene substep_bodies = 'near' only the bodies of the pairs that may come near
+!>                in the fluid step (module near_bodies), the others first in one update of the
+!>                provider over the whole step (single_step; docs/theory.md, "Near-pair sub-steps");
 !>   end rule     &run end_time, max_steps, and the pair's (twice the first collision, 'settled');
 !>   progress, field outputs (&output field_interval), checkpoint (&output checkpoint_interval).
 !> Without a fluid (&scene fluid = 'none' or 'stokes') the same loop runs with no fluid stages and
@@ -55,7 +58,10 @@ module scene_loop
                                     flow_output_finish
   use pair_setup, only: pair_t, build_pair
   use particle_system, only: particle_system_t, particle_loads_t, particle_system_interact, particle_system_step, &
-                             particle_system_set_added_inertia, particle_loads_zero
+                             particle_system_set_added_inertia, particle_loads_zero, particle_system_set_members, &
+                             particle_search_gap, particle_system_all_members
+  use near_bodies, only: near_bodies_t, near_bodies_find
+  use point_particle_coupling, only: sample_start, sample_end
   use pair_outcome, only: pair_outcome_rules_t, pair_outcome_rules_of
   use particle_output, only: particle_output_t, run_summary_t, particle_output_close, write_summary_json, &
                              pair_run_metadata_t, particle_output_open
@@ -108,6 +114,8 @@ contains
     real(wp) :: dt, step_start, rate, viscous_limit, next_field_time
     integer :: substeps
     logical :: finite, finished
+    type(near_bodies_t) :: near                          ! &scene substep_bodies = 'near': who takes the sub-steps
+    logical :: near_only
 
     with_fluid = cfg%scene%fluid == 'resolved'
     with_pair = cfg%scene%particles == 'pair'
@@ -120,6 +128,7 @@ contains
     with_clusters = .false.
     substeps = 1
     if (with_fluid .and. with_particles) substeps = cfg%scene%particle_substeps
+    near_only = cfg%scene%substep_bodies == 'near'
 
     call set_up()
     context%first_step = loop_step()
@@ -298,6 +307,19 @@ contains
       integer :: substep
       call timer_tic(context%timers%particles)
       dt_particle = dt / substeps
+      if (near_only) then
+        ! The bodies of the pairs that may come near take the sub-steps; the others the whole
+        ! step in one update (module near_bodies; docs/theory.md, "Near-pair sub-steps").
+        call timer_tic('near-body search')
+        call particle_system_all_members(system)   ! the search gap from every body's speed
+        call near_bodies_find(near, system, hydrodynamics%centre_fluid_velocity(sample_start), &
+                              hydrodynamics%centre_fluid_velocity(sample_end), dt, particle_search_gap(system, dt_particle))
+        call particle_system_set_members(system, near%members(1:near%count))
+        call timer_toc('near-body search')
+        call timer_tic('one-step update')
+        call hydrodynamics%single_step(system, near%single(1:system%n - near%count), dt)
+        call timer_toc('one-step update')
+      end if
       call felt_loads(0.0_wp)
       do substep = 1, substeps
         call particle_system_step(system, dt_particle, hydrodynamic)
@@ -307,7 +329,11 @@ contains
         if (with_fluid .and. substep == substeps) loop%time = solver%time
         call record_particle_step()
         ! The loads of the new state: the next sub-step's, and the sample's.
-        call felt_loads(real(substep, wp) / substeps)
+        if (near_only .and. substep == substeps) then
+          call hydrodynamics%loads(system, 1.0_wp, hydrodynamic)   ! every body's, for the samples
+        else
+          call felt_loads(real(substep, wp) / substeps)
+        end if
         if (sampled(cfg, loop%step)) call write_rows()
       end do
       call timer_toc(context%timers%particles)
@@ -378,6 +404,8 @@ contains
       real(wp), intent(in) :: theta
       if (cfg%pair%hydrodynamics_from == 'first_contact' .and. summary%collisions == 0) then
         hydrodynamic = particle_loads_zero(system%n)
+      else if (near_only .and. allocated(system%members)) then
+        call hydrodynamics%member_loads(system, theta, near%members(1:near%count), hydrodynamic)
       else
         call hydrodynamics%loads(system, theta, hydrodynamic)
       end if
@@ -421,6 +449,9 @@ contains
             ' m  v_n = '//scientific_text(normal_approach_speed(system, the_pair))//' m/s  contact episodes = '// &
             int_text(summary%contact_episodes)//' (impulses '//int_text(summary%collisions)//')')
         if (with_particles .and. .not. with_pair) call log_line(bodies_progress_detail(system, summary%collisions))
+        if (near_only) call log_line('  sub-steps: '//int_text(near%count)//' bodies of '//int_text(near%near_pairs)// &
+            ' pairs that may come near; '//int_text(system%n - near%count)//' in one update; misses so far '// &
+            int_text(int(near%misses)))
         call hydrodynamics%log_progress(solver)
       end if
     end subroutine progress

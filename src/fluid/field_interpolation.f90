@@ -27,7 +27,7 @@ module field_interpolation
   implicit none
   private
   public :: on_x_faces, on_y_faces, on_z_faces, on_cell_centres, point_on_this_rank, interpolate_here, &
-            interpolate_at_points, gradient_at_points, velocity_gradient_at_points
+            interpolate_at_points, gradient_at_points, velocity_gradient_at_points, velocity_and_gradient_at_points
 
   !> Where a field's nodes are (fluid_grid): u on the x faces, v on y, w on z, pressure at centres.
   integer, parameter :: on_x_faces = 1, on_y_faces = 2, on_z_faces = 3, on_cell_centres = 4
@@ -138,6 +138,59 @@ contains
     call MPI_Allreduce(MPI_IN_PLACE, gradients, size(gradients), mpi_wp, MPI_SUM, world)
   end subroutine velocity_gradient_at_points
 
+  !> interpolate_at_points of u, v and w and velocity_gradient_at_points in one pass over the
+  !> points (collective): each point's 12 values from the axis stencils it shares (the value's
+  !> stencils along the axes a derivative does not act on), every value the same arithmetic and
+  !> the same rank as in those two routines. One pass keeps each point's nodes in cache.
+  subroutine velocity_and_gradient_at_points(grid, u, v, w, points, velocity, gradients)
+    type(fluid_grid_t), intent(in) :: grid
+    real(wp), intent(in) :: u(0:, 0:, 0:), v(0:, 0:, 0:), w(0:, 0:, 0:)
+    real(wp), intent(in) :: points(:, :)          !< (3, n), m
+    real(wp), intent(out) :: velocity(:, :)       !< (3, n)
+    real(wp), intent(out) :: gradients(:, :, :)   !< (3, 3, n)
+    real(wp) :: q(3)
+    logical :: here, below
+    integer :: p
+    velocity = 0
+    gradients = 0
+    do p = 1, size(points, 2)
+      q = [wrapped(points(1, p), grid%lx), wrapped(points(2, p), grid%ly), wrapped(points(3, p), grid%lz)]
+      here = point_on_this_rank(grid, points(:, p))
+      below = derivative_on_this_rank(grid, points(:, p), on_z_faces, 3)
+      call component(u, on_x_faces, 1)
+      call component(v, on_y_faces, 2)
+      call component(w, on_z_faces, 3)
+    end do
+    call MPI_Allreduce(MPI_IN_PLACE, velocity, size(velocity), mpi_wp, MPI_SUM, world)
+    call MPI_Allreduce(MPI_IN_PLACE, gradients, size(gradients), mpi_wp, MPI_SUM, world)
+  contains
+    !> Component k (on location's nodes) at point p: its value and its three derivatives.
+    subroutine component(field, location, k)
+      real(wp), intent(in) :: field(0:, 0:, 0:)
+      integer, intent(in) :: location, k
+      integer :: ix(3), iy(3), iz(3), jx(3), jy(3), jz(3)
+      real(wp) :: wx(3), wy(3), wz(3), dx(3), dy(3), dz(3)
+      logical :: z_here
+      call axis_stencil(q(1), grid%dx, grid%nx, location /= on_x_faces, .false., .false., 0, 0, ix, wx)
+      call axis_stencil(q(2), grid%dy, grid%ny, location /= on_y_faces, .false., .false., 0, 0, iy, wy)
+      if (here) then
+        call axis_stencil(q(3), grid%dz, grid%nz, location /= on_z_faces, .false., .true., grid%z_offset, &
+                          grid%nz_local, iz, wz)
+        velocity(k, p) = weighted_sum(field, ix, wx, iy, wy, iz, wz)
+        call axis_stencil(q(1), grid%dx, grid%nx, location /= on_x_faces, .true., .false., 0, 0, jx, dx)
+        gradients(k, 1, p) = weighted_sum(field, jx, dx, iy, wy, iz, wz)
+        call axis_stencil(q(2), grid%dy, grid%ny, location /= on_y_faces, .true., .false., 0, 0, jy, dy)
+        gradients(k, 2, p) = weighted_sum(field, ix, wx, jy, dy, iz, wz)
+      end if
+      z_here = here
+      if (location == on_z_faces) z_here = below
+      if (.not. z_here) return
+      call axis_stencil(q(3), grid%dz, grid%nz, location /= on_z_faces, .true., .true., grid%z_offset, &
+                        grid%nz_local, jz, dz)
+      gradients(k, 3, p) = weighted_sum(field, ix, wx, iy, wy, jz, dz)
+    end subroutine component
+  end subroutine velocity_and_gradient_at_points
+
   !> x wrapped into [0, length) (modulo alone can round up to length itself for tiny negative x).
   pure real(wp) function wrapped(x, length)
     real(wp), intent(in) :: x, length
@@ -163,21 +216,39 @@ contains
                       0, 0, iy, wy)
     call axis_stencil(wrapped(point(3), grid%lz), grid%dz, grid%nz, location /= on_z_faces, derivative == 3, .true., &
                       grid%z_offset, grid%nz_local, iz, wz)
+    if (.not. present(factor)) then
+      total = weighted_sum(field, ix, wx, iy, wy, iz, wz)
+      return
+    end if
     total = 0
     do c = 1, 3
       if (wz(c) == 0.0_wp) cycle   ! an exact zero weight (unused third node): skip its loads
       do b = 1, 3
         if (wy(b) == 0.0_wp) cycle
         do a = 1, 3
-          if (present(factor)) then
-            total = total + wx(a) * wy(b) * wz(c) * field(ix(a), iy(b), iz(c)) * factor(ix(a), iy(b), iz(c))
-          else
-            total = total + wx(a) * wy(b) * wz(c) * field(ix(a), iy(b), iz(c))
-          end if
+          total = total + wx(a) * wy(b) * wz(c) * field(ix(a), iy(b), iz(c)) * factor(ix(a), iy(b), iz(c))
         end do
       end do
     end do
   end function stencil_sum
+
+  !> The sum of the field's nodes (ix, iy, iz) with the weights (wx, wy, wz) of axis_stencil.
+  pure real(wp) function weighted_sum(field, ix, wx, iy, wy, iz, wz) result(total)
+    real(wp), intent(in) :: field(0:, 0:, 0:)
+    integer, intent(in) :: ix(3), iy(3), iz(3)
+    real(wp), intent(in) :: wx(3), wy(3), wz(3)
+    integer :: a, b, c
+    total = 0
+    do c = 1, 3
+      if (wz(c) == 0.0_wp) cycle   ! an exact zero weight (unused third node): skip its loads
+      do b = 1, 3
+        if (wy(b) == 0.0_wp) cycle
+        do a = 1, 3
+          total = total + wx(a) * wy(b) * wz(c) * field(ix(a), iy(b), iz(c))
+        end do
+      end do
+    end do
+  end function weighted_sum
 
   !> Nodes and weights along one direction for coordinate s in [0, n h). Node m (global, 1-based)
   !> is at (m - 1/2) h for a centred direction, m h for a face direction. Value: the two nodes
@@ -210,7 +281,16 @@ contains
       if (sliced) then
         index(j) = m0 + j - 1 - offset
       else
-        index(j) = modulo(m0 + j - 2, n) + 1
+        ! modulo(m0 + j - 2, n) + 1 for m0 + j - 2 in [-n, 2n) (s in [0, L): m0 in [-1, n]),
+        ! without an integer division (the inner loop of every point sample).
+        index(j) = m0 + j - 2
+        if (index(j) < 0) then
+          index(j) = index(j) + n
+        else if (index(j) >= n) then
+          index(j) = index(j) - n
+        end if
+        if (index(j) < 0 .or. index(j) >= n) index(j) = modulo(m0 + j - 2, n)
+        index(j) = index(j) + 1
       end if
     end do
     if (sliced) then

@@ -17,7 +17,8 @@
 !> Result: first(1:count), second(1:count) sorted by (first, second), the order of the pair list
 !> (1,2), (1,3), ..., (N-1,N) restricted to the near pairs. The near test is the same expression,
 !> in the same floating-point operations, as the particle system's per-pair test (near_pair), so
-!> the broad phase and brute force (all_near_pairs) agree exactly.
+!> the broad phase and brute force (all_near_pairs) agree exactly (the cell list's cheap pre-test,
+!> surely_apart, only ever skips pairs that test is certain to find apart).
 module broad_phase
   use agglo_kinds, only: wp, i8
   use periodic_box, only: image_shift
@@ -47,6 +48,33 @@ contains
     image = position_j + image_shift(position_j - position_i, box_length)
     near_pair = .not. (norm2(image - position_i) - (radius_i + radius_j) > gap)
   end function near_pair
+
+  !> A cheap pre-test of near_pair: .true. only when the centres are farther apart than reach
+  !> (= radius_i + radius_j + gap) by a relative margin of 1e-9, far above the round-off by which
+  !> this squared minimum-image distance can differ from near_pair's; so a pair it passes is far for
+  !> near_pair too, and the exact test runs only for the few pairs that may be near.
+  pure logical function surely_apart(position_i, position_j, reach, box_length)
+    real(wp), intent(in) :: position_i(3), position_j(3), reach, box_length(3)
+    real(wp) :: d, distance2, limit
+    integer :: k
+    surely_apart = .false.
+    limit = reach * (1.0_wp + 1.0e-9_wp)
+    if (.not. (limit < sqrt(huge(1.0_wp)))) return
+    distance2 = 0.0_wp
+    do k = 1, 3
+      d = position_j(k) - position_i(k)
+      if (box_length(k) > 0.0_wp) then
+        if (d > 0.5_wp * box_length(k)) then
+          d = d - box_length(k)
+        else if (d < -0.5_wp * box_length(k)) then
+          d = d + box_length(k)
+        end if
+        if (abs(d) > 0.5_wp * box_length(k)) return   ! not wrapped into the box: leave it to near_pair
+      end if
+      distance2 = distance2 + d * d
+    end do
+    surely_apart = distance2 > limit * limit
+  end function surely_apart
 
   !> All near pairs by testing every pair i < j (the reference of the cell list; O(N^2)).
   subroutine all_near_pairs(positions, radii, box_length, gap, first, second)
@@ -79,7 +107,7 @@ contains
     real(wp), intent(in) :: positions(:,:), radii(:), box_length(3), gap
     real(wp) :: width_min, origin(3), extent(3), width(3), scale, total
     integer :: n, k, i, j, c, ncells, count_i, offsets(3, 3), noffsets(3), a, b, d, cell(3)
-    integer :: neighbour_cells(27), nneighbours, m
+    integer :: neighbour_cells(27), nneighbours, m, linear_offsets(27), nlinear
     logical :: inside
     n = size(radii)
     finder%count = 0
@@ -150,26 +178,52 @@ contains
       finder%next(i) = finder%head(c)
       finder%head(c) = i
     end do
-    do i = 1, n - 1
-      ! The distinct neighbour cells of body i's cell.
-      nneighbours = 0
-      do a = 1, noffsets(1)
-        do b = 1, noffsets(2)
-          do d = 1, noffsets(3)
-            cell = finder%cell_of(:, i) + [offsets(a, 1), offsets(b, 2), offsets(d, 3)]
-            call wrap_cell(cell, finder%cells, box_length, inside)
-            if (.not. inside) cycle
-            nneighbours = nneighbours + 1
-            neighbour_cells(nneighbours) = linear_cell(cell, finder%cells)
+    ! Linear offsets of the 27 neighbours of a cell that is at least one cell from every edge (no
+    ! wrap needed): most cells of a large system.
+    nlinear = 0
+    if (all(noffsets == 3)) then
+      do a = -1, 1
+        do b = -1, 1
+          do d = -1, 1
+            nlinear = nlinear + 1
+            linear_offsets(nlinear) = a + finder%cells(1) * (b + finder%cells(2) * d)
           end do
         end do
       end do
+    end if
+    do i = 1, n - 1
+      ! The distinct neighbour cells of body i's cell.
+      nneighbours = 0
+      if (nlinear == 27) then
+        if (all(finder%cell_of(:, i) >= 1 .and. finder%cell_of(:, i) <= finder%cells - 2)) then
+          c = linear_cell(finder%cell_of(:, i), finder%cells)
+          neighbour_cells = c + linear_offsets
+          nneighbours = 27
+        end if
+      end if
+      if (nneighbours == 0) then
+        do a = 1, noffsets(1)
+          do b = 1, noffsets(2)
+            do d = 1, noffsets(3)
+              cell = finder%cell_of(:, i) + [offsets(a, 1), offsets(b, 2), offsets(d, 3)]
+              call wrap_cell(cell, finder%cells, box_length, inside)
+              if (.not. inside) cycle
+              nneighbours = nneighbours + 1
+              neighbour_cells(nneighbours) = linear_cell(cell, finder%cells)
+            end do
+          end do
+        end do
+      end if
       count_i = 0
       do m = 1, nneighbours
         j = finder%head(neighbour_cells(m))
         do while (j /= 0)
           if (j > i) then
             finder%tests = finder%tests + 1_i8
+            if (surely_apart(positions(:, i), positions(:, j), radii(i) + radii(j) + gap, box_length)) then
+              j = finder%next(j)
+              cycle
+            end if
             if (near_pair(positions(:, i), positions(:, j), radii(i), radii(j), box_length, gap)) then
               count_i = count_i + 1
               if (count_i > size(finder%row)) finder%row = [finder%row, finder%row]

@@ -57,8 +57,9 @@ module particle_system
   private
   public :: particle_models_t, particle_pair_t, particle_loads_t, particle_system_t, particle_system_create, &
             particle_system_interact, particle_system_step, particle_loads_zero, &
-            unwrapped_position, pair_image, pair_body_image, particle_system_energy, particle_system_set_added_inertia
-  public :: particle_interaction_gap, bounding_radius
+            unwrapped_position, pair_image, pair_body_image, particle_system_energy, particle_system_set_added_inertia, &
+            particle_system_set_members, particle_system_all_members
+  public :: particle_interaction_gap, bounding_radius, wrap_body, particle_search_gap
 
   !> The pair models and how the bodies move; set up once by the scene.
   type :: particle_models_t
@@ -122,6 +123,14 @@ module particle_system
     !> added mass implicitly sets them (particle_system_set_added_inertia)
     type(added_inertia_t), allocatable :: impulse_added(:)
     logical :: impulses_in_fluid = .false.               !< some impulse_added is non-zero
+    !> The bodies the particle steps move, in increasing order, when only some do (a suspension whose
+    !> other bodies take the fluid step in one update: particle_system_set_members); not allocated:
+    !> every body. The pair records then hold pairs of members only.
+    integer, allocatable :: members(:)
+    !> Scratch of the steps, kept so that no step allocates: the members' centres and bounding
+    !> radii for the broad phase, (3, n) and (n); the impulse clock per body (resolve_collisions).
+    real(wp), allocatable :: scratch_positions(:,:), scratch_radii(:)
+    integer(i8), allocatable :: touched(:)
   end type particle_system_t
 
 contains
@@ -239,6 +248,33 @@ contains
     end do
   end subroutine particle_system_set_added_inertia
 
+  !> From now on the particle steps move only the bodies members (increasing indices, each at most
+  !> once) and keep pair records for pairs of members only: the caller guarantees that no other
+  !> body comes within the broad phase's gap of any body during those steps (module header of
+  !> scene_loop, "near bodies"). The pair records of non-members are dropped at the next interaction.
+  subroutine particle_system_set_members(system, members)
+    type(particle_system_t), intent(inout) :: system
+    integer, intent(in) :: members(:)
+    integer :: k
+    do k = 1, size(members)
+      if (members(k) < 1 .or. members(k) > system%n) call fatal('particle_system_set_members: body index out of range')
+      if (k > 1) then
+        if (members(k) <= members(k - 1)) call fatal('particle_system_set_members: members must increase')
+      end if
+    end do
+    if (allocated(system%members)) then
+      if (size(system%members) /= size(members)) deallocate(system%members)
+    end if
+    if (.not. allocated(system%members)) allocate(system%members(size(members)))
+    system%members = members
+  end subroutine particle_system_set_members
+
+  !> Every body takes the particle steps again (the default).
+  subroutine particle_system_all_members(system)
+    type(particle_system_t), intent(inout) :: system
+    if (allocated(system%members)) deallocate(system%members)
+  end subroutine particle_system_all_members
+
   !> One particle step of length dt (module header): Newton-Euler under external + DLVO loads, then
   !> the pair interactions of the new state. external: (3, n) loads held fixed over the call;
   !> absent = none.
@@ -247,6 +283,10 @@ contains
     real(wp), intent(in) :: dt
     type(particle_loads_t), intent(in), optional :: external
     integer :: i
+    if (allocated(system%members)) then
+      call step_members(system, dt, external)
+      return
+    end if
     if (present(external)) then
       if (size(external%force, 2) /= system%n .or. size(external%torque, 2) /= system%n) &
         call fatal('particle_system_step: external loads are not sized for the system''s bodies')
@@ -267,6 +307,36 @@ contains
     call particle_system_interact(system, dt)
   end subroutine particle_system_step
 
+  !> particle_system_step for the members only (the same arithmetic per body).
+  subroutine step_members(system, dt, external)
+    type(particle_system_t), intent(inout) :: system
+    real(wp), intent(in) :: dt
+    type(particle_loads_t), intent(in), optional :: external
+    integer :: i, k
+    if (present(external)) then
+      if (size(external%force, 2) /= system%n .or. size(external%torque, 2) /= system%n) &
+        call fatal('particle_system_step: external loads are not sized for the system''s bodies')
+      do k = 1, size(system%members)
+        i = system%members(k)
+        call rigid_body_step(system%bodies(i), external%force(:, i) + system%dlvo_loads%force(:, i), &
+                             external%torque(:, i) + system%dlvo_loads%torque(:, i), dt, system%models%integrator)
+      end do
+    else
+      do k = 1, size(system%members)
+        i = system%members(k)
+        call rigid_body_step(system%bodies(i), system%dlvo_loads%force(:, i), system%dlvo_loads%torque(:, i), dt, &
+                             system%models%integrator)
+      end do
+    end if
+    do i = 1, size(system%pairs)
+      system%pairs(i)%active = .false.
+    end do
+    do k = 1, size(system%members)
+      call wrap_body(system, system%members(k))
+    end do
+    call particle_system_interact(system, dt)
+  end subroutine step_members
+
   !> The pair interactions of the current state (steps 2-4 of the module header): with a box, the
   !> near pairs of the broad phase first (records of pairs still near kept, with their warm starts);
   !> closest points of the pairs that may interact (not recomputed where already current), collision
@@ -283,16 +353,44 @@ contains
       call update_contact(system, system%pairs(p))
     end do
     call resolve_collisions(system, dt)
-    system%lubrication_loads = particle_loads_zero(system%n)
+    if (allocated(system%members)) then
+      call zero_members(system%lubrication_loads, system%members)
+    else
+      system%lubrication_loads = particle_loads_zero(system%n)
+    end if
     do p = 1, size(system%pairs)
       call lubricate_pair(system, system%pairs(p), dt)
     end do
-    system%dlvo_loads%force = 0.0_wp
-    system%dlvo_loads%torque = 0.0_wp
+    if (allocated(system%members)) then
+      call zero_members(system%dlvo_loads, system%members)
+    else
+      system%dlvo_loads%force = 0.0_wp
+      system%dlvo_loads%torque = 0.0_wp
+    end if
     do p = 1, size(system%pairs)
       call dlvo_pair(system, system%pairs(p))
     end do
   end subroutine particle_system_interact
+
+  !> The loads of the members set to zero (the others' are not touched).
+  subroutine zero_members(loads, members)
+    type(particle_loads_t), intent(inout) :: loads
+    integer, intent(in) :: members(:)
+    integer :: k
+    do k = 1, size(members)
+      loads%force(:, members(k)) = 0.0_wp
+      loads%torque(:, members(k)) = 0.0_wp
+    end do
+  end subroutine zero_members
+
+  !> The broad phase's gap (m) of a particle step dt at the current state: the interaction gap,
+  !> widened by the collision reach with collisions on (particle_system_interact).
+  real(wp) function particle_search_gap(system, dt)
+    type(particle_system_t), intent(in) :: system
+    real(wp), intent(in) :: dt
+    particle_search_gap = system%models%interaction_gap
+    if (system%models%collisions) particle_search_gap = max(particle_search_gap, collision_reach(system, dt))
+  end function particle_search_gap
 
   !> Gap (m) between bounding spheres within which a collision can be detected this step: the
   !> detection distance max(floor, factor v_n dt) at the largest approach speed two bodies can
@@ -301,9 +399,10 @@ contains
     type(particle_system_t), intent(in) :: system
     real(wp), intent(in) :: dt
     real(wp) :: fastest
-    integer :: i
+    integer :: i, k
     fastest = 0.0_wp
-    do i = 1, system%n
+    do k = 1, body_count(system)
+      i = body_index(system, k)
       fastest = max(fastest, norm2(system%bodies(i)%velocity) &
                              + norm2(system%bodies(i)%angular_velocity_body) * system%bounding_radii(i))
     end do
@@ -311,17 +410,47 @@ contains
                           system%models%collision_model%detection_factor * 2.0_wp * fastest * dt)
   end function collision_reach
 
-  !> The broad phase's near pairs at the current positions (system%finder).
+  !> The bodies the steps move: n, or the members.
+  pure integer function body_count(system)
+    type(particle_system_t), intent(in) :: system
+    if (allocated(system%members)) then
+      body_count = size(system%members)
+    else
+      body_count = system%n
+    end if
+  end function body_count
+
+  !> The k-th body the steps move.
+  pure integer function body_index(system, k)
+    type(particle_system_t), intent(in) :: system
+    integer, intent(in) :: k
+    if (allocated(system%members)) then
+      body_index = system%members(k)
+    else
+      body_index = k
+    end if
+  end function body_index
+
+  !> The broad phase's near pairs at the current positions (system%finder), among the members if
+  !> there are members (their increasing order keeps the pairs sorted by body index).
   subroutine find_near_pairs(system, gap)
     type(particle_system_t), intent(inout) :: system
     real(wp), intent(in) :: gap
-    real(wp), allocatable :: positions(:,:)
-    integer :: i
-    allocate(positions(3, system%n))
-    do i = 1, system%n
-      positions(:, i) = system%bodies(i)%position
+    integer :: k, m
+    if (.not. allocated(system%scratch_positions)) allocate(system%scratch_positions(3, system%n), &
+                                                             system%scratch_radii(system%n))
+    m = body_count(system)
+    do k = 1, m
+      system%scratch_positions(:, k) = system%bodies(body_index(system, k))%position
+      system%scratch_radii(k) = system%bounding_radii(body_index(system, k))
     end do
-    call broad_phase_find(system%finder, positions, system%bounding_radii, system%box_length, gap)
+    call broad_phase_find(system%finder, system%scratch_positions(:, 1:m), system%scratch_radii(1:m), &
+                          system%box_length, gap)
+    if (.not. allocated(system%members)) return
+    do k = 1, system%finder%count
+      system%finder%first(k) = system%members(system%finder%first(k))
+      system%finder%second(k) = system%members(system%finder%second(k))
+    end do
   end subroutine find_near_pairs
 
   !> Pair records for the near pairs of the current state, sorted by (first, second): a pair that
@@ -407,15 +536,19 @@ contains
     type(particle_system_t), intent(inout) :: system
     real(wp), intent(in) :: dt
     real(wp), parameter :: sweep_tolerance = 1.0e-10_wp
-    integer(i8), allocatable :: touched(:), tested(:)
+    integer(i8), allocatable :: tested(:)
     real(wp), allocatable :: separation_speed(:), normal_impulse(:)
     integer, allocatable :: members(:)
     integer(i8) :: clock
     integer :: p, q, sweeps, impulses, wave_size, cap
     real(wp) :: fastest, slowest, speed
     logical :: applied
-    system%collision_loads%force = 0.0_wp
-    system%collision_loads%torque = 0.0_wp
+    if (allocated(system%members)) then
+      call zero_members(system%collision_loads, system%members)
+    else
+      system%collision_loads%force = 0.0_wp
+      system%collision_loads%torque = 0.0_wp
+    end if
     system%collisions_last = 0
     system%impulse_sweeps_last = 0
     system%approaching_left = 0
@@ -427,9 +560,15 @@ contains
       call ghost_contacts(system, dt)
       return
     end if
-    allocate(touched(system%n), tested(size(system%pairs)), separation_speed(size(system%pairs)), &
+    if (size(system%pairs) == 0) return
+    allocate(tested(size(system%pairs)), separation_speed(size(system%pairs)), &
              normal_impulse(size(system%pairs)), members(size(system%pairs)))
-    touched = 0_i8
+    if (.not. allocated(system%touched)) allocate(system%touched(system%n))
+    ! Only the bodies of the pairs are ever read or set below.
+    do p = 1, size(system%pairs)
+      system%touched(system%pairs(p)%first) = 0_i8
+      system%touched(system%pairs(p)%second) = 0_i8
+    end do
     tested = -1_i8
     clock = 0_i8
     fastest = 0.0_wp
@@ -441,7 +580,7 @@ contains
       wave_size = 0
       do p = 1, size(system%pairs)
         associate (pair => system%pairs(p))
-          if (max(touched(pair%first), touched(pair%second)) <= tested(p)) cycle
+          if (max(system%touched(pair%first), system%touched(pair%second)) <= tested(p)) cycle
           tested(p) = clock
           if (.not. pair%active) cycle
           if (.not. pair_approaching(system, pair, dt, slowest, fastest)) cycle
@@ -461,8 +600,8 @@ contains
         do q = 1, wave_size
           p = members(q)
           associate (pair => system%pairs(p))
-            if (max(touched(pair%first), touched(pair%second)) <= tested(p)) cycle
-            if (touched(pair%first) == 0_i8 .and. touched(pair%second) == 0_i8) then
+            if (max(system%touched(pair%first), system%touched(pair%second)) <= tested(p)) cycle
+            if (system%touched(pair%first) == 0_i8 .and. system%touched(pair%second) == 0_i8) then
               call collide_pair(system, pair, dt, slowest, applied, fastest)
               if (applied) then
                 separation_speed(p) = pair%collision%restitution_used * pair%collision%normal_velocity_before
@@ -473,8 +612,8 @@ contains
             end if
             if (applied) then
               clock = clock + 1_i8
-              touched(pair%first) = clock
-              touched(pair%second) = clock
+              system%touched(pair%first) = clock
+              system%touched(pair%second) = clock
               impulses = impulses + 1
             end if
             tested(p) = clock
@@ -747,22 +886,30 @@ contains
   !> Wrap positions into [0, L) in every periodic direction, counting the crossings.
   subroutine wrap_positions(system)
     type(particle_system_t), intent(inout) :: system
-    integer :: i, k
-    integer(i8) :: crossings
+    integer :: i
     do i = 1, system%n
-      do k = 1, 3
-        if (system%box_length(k) <= 0.0_wp) cycle
-        crossings = floor(system%bodies(i)%position(k) / system%box_length(k), i8)
-        if (crossings == 0_i8) cycle
-        system%bodies(i)%position(k) = system%bodies(i)%position(k) - real(crossings, wp) * system%box_length(k)
-        ! Round-off can leave x = L after the subtraction (x just below 0): fold it to 0.
-        if (system%bodies(i)%position(k) >= system%box_length(k)) then
-          system%bodies(i)%position(k) = system%bodies(i)%position(k) - system%box_length(k)
-          crossings = crossings + 1_i8
-        end if
-        system%wraps(k, i) = system%wraps(k, i) + crossings
-      end do
+      call wrap_body(system, i)
     end do
   end subroutine wrap_positions
+
+  !> Wrap body i's position into [0, L) in every periodic direction, counting the crossings.
+  subroutine wrap_body(system, i)
+    type(particle_system_t), intent(inout) :: system
+    integer, intent(in) :: i
+    integer :: k
+    integer(i8) :: crossings
+    do k = 1, 3
+      if (system%box_length(k) <= 0.0_wp) cycle
+      crossings = floor(system%bodies(i)%position(k) / system%box_length(k), i8)
+      if (crossings == 0_i8) cycle
+      system%bodies(i)%position(k) = system%bodies(i)%position(k) - real(crossings, wp) * system%box_length(k)
+      ! Round-off can leave x = L after the subtraction (x just below 0): fold it to 0.
+      if (system%bodies(i)%position(k) >= system%box_length(k)) then
+        system%bodies(i)%position(k) = system%bodies(i)%position(k) - system%box_length(k)
+        crossings = crossings + 1_i8
+      end if
+      system%wraps(k, i) = system%wraps(k, i) + crossings
+    end do
+  end subroutine wrap_body
 
 end module particle_system

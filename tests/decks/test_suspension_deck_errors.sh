@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# checks: 14
+# checks: 17
 # Bad &suspension decks (&scene particles = 'suspension'; docs/decks.md, &suspension) are refused
 # with the group, the variable, the value and what is allowed: before anything runs for the
 # values and their combinations; at the placement, before any body is allocated, for
@@ -72,3 +72,19 @@ expect_deck_error ghost_without_collisions 1 "&run name = 's', end_time = 1.0e-6
 &suspension count = 4, ghost = .true. /" "&suspension ghost = .true. with &scene collisions = .false. is not allowed"
 expect_error body_longer_than_half_box "&suspension radius(1) = 3.00000E-04 is not allowed; allowed: a body whose longest extent" \
   "&suspension shape = 'needle', radius = 300.0e-6, count = 1 /"
+# &scene substep_bodies = 'near' (docs/decks.md): the one-step update is the point particle's.
+expect_deck_error near_substeps_without_point 1 "&run name = 's', end_time = 1.0e-6, dt = 1.0e-7, overwrite = .true. /
+&scene fluid = 'none', particles = 'suspension', substep_bodies = 'near' /
+&pair density = 2710.0 /
+&suspension count = 4 /" "&scene substep_bodies = 'near' with fluid = 'none', particles = 'suspension', particle_coupling = 'resolved' is not allowed; allowed: 'all'"
+expect_deck_error substep_bodies_unknown 1 "&run name = 's', end_time = 1.0e-6, dt = 1.0e-7, overwrite = .true. /
+&scene fluid = 'none', particles = 'suspension', substep_bodies = 'some' /
+&pair density = 2710.0 /
+&suspension count = 4 /" "&scene substep_bodies = 'some' is not allowed; allowed: one of 'all' | 'near'"
+expect_deck_error near_substeps_rows_between_fluid_steps 1 "&run name = 's', end_time = 1.0e-6, dt = 1.0e-5, overwrite = .true. /
+&scene fluid = 'resolved', particles = 'suspension', particle_coupling = 'point', particle_substeps = 10,
+       substep_bodies = 'near' /
+&grid nx = 16, ny = 16, nz = 16 /
+&pair density = 2710.0 /
+&suspension count = 4 /
+&output particle_interval = 15 /" "&output particle_interval = 15 (or stats_interval when 0) with &scene substep_bodies = 'near' is not allowed; allowed: a multiple of &scene particle_substeps = 10"
