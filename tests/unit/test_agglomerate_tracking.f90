@@ -1,4 +1,4 @@
-! checks: 28
+! checks: 34
 !> Unit tests of agglomerate_tracking and the clusters of its bonds (docs/theory.md, "Agglomerates"),
 !> with calcite spheres of radius r and the paper's DLVO model (Table 1) in a periodic box of side L:
 !>  - three spheres at rest in a line along x across the periodic boundary, gaps h0 = 5 nm (the vdW
@@ -16,6 +16,13 @@
 !>  - the chain's third body moved 300 nm further (beyond h_r, within the DLVO cut-off, so the pair
 !>    keeps its record): one breakage event (kind 2) for the pair (2, 3) at that gap; then the first
 !>    body moved 2 um away (the pair loses its record): a breakage reported at its last gap h0;
+!>  - the rule is blind to the sign of v_n, the events report it: two spheres 20 nm apart with the
+!>    upper one moving along the line of centres at speed w, the critical speed v_c from
+!>    mu v_c^2 / 2 = U_b(20 nm) (escape_energy at the pair's chi_eta, mu = m / 2): receding at
+!>    0.9 v_c a bond forms with normal speed -0.9 v_c (< 0 receding); approaching at 0.9 v_c at the
+!>    same gap it stays (no event); approaching at 1.1 v_c it breaks with normal speed +1.1 v_c at the
+!>    same gap, the current values. So a pair that recedes, turns and comes back within the well
+!>    forms and breaks at mirror states (docs/theory.md, "Agglomerates", reading the events);
 !>  - contact episodes counted per species pair: (1,1), (1,2), (2,2) in the order of species_pair_index.
 program test_agglomerate_tracking
   use agglo_kinds, only: wp, i8
@@ -23,7 +30,7 @@ program test_agglomerate_tracking
   use physical_constants, only: pi
   use spheroid, only: spheroid_t, make_spheroid
   use rigid_body, only: rigid_body_t, rigid_body_of_spheroid, integrator_euler
-  use dlvo, only: dlvo_setup, dlvo_energy, dlvo_range
+  use dlvo, only: dlvo_setup, dlvo_energy, dlvo_range, escape_energy
   use particle_system, only: particle_models_t, particle_system_t, particle_system_create, particle_system_interact, &
                              particle_interaction_gap
   use agglomerates, only: agglomerates_t, agglomerates_analyse, bond_image
@@ -39,6 +46,7 @@ program test_agglomerate_tracking
   call test_start('agglomerate_tracking')
   call chain_and_free_pairs()
   call species_counts()
+  call mirror_states()
   call test_finish()
 
 contains
@@ -169,4 +177,48 @@ contains
     call agglomerate_count_contact(tracker, 2, 7)
     call check(all(tracker%collisions == [1_i8, 2_i8, 1_i8]), 'episodes per species pair (1, 2, 1)')
   end subroutine species_counts
+
+  !> Two spheres gap h apart along z, the upper one moving at w along +z (w > 0: receding).
+  subroutine two_spheres(system, h, w)
+    type(particle_system_t), intent(out) :: system
+    real(wp), intent(in) :: h, w
+    type(spheroid_t) :: shapes(2)
+    type(rigid_body_t) :: bodies(2)
+    real(wp) :: centre(3)
+    shapes = make_spheroid('sphere', r, density)
+    centre = [0.5_wp * box, 0.5_wp * box, 0.3_wp * box]
+    call rigid_body_of_spheroid(bodies(1), shapes(1), centre, [1.0_wp, 0.0_wp, 0.0_wp, 0.0_wp], [0.0_wp, 0.0_wp, 0.0_wp])
+    call rigid_body_of_spheroid(bodies(2), shapes(2), centre + [0.0_wp, 0.0_wp, 2.0_wp * r + h], &
+                                [1.0_wp, 0.0_wp, 0.0_wp, 0.0_wp], [0.0_wp, 0.0_wp, w])
+    call particle_system_create(system, shapes, bodies, dlvo_models(), box_length=[box, box, box])
+    call particle_system_interact(system, 1.0e-7_wp)
+  end subroutine two_spheres
+
+  subroutine mirror_states()
+    real(wp), parameter :: h = 20.0e-9_wp
+    type(particle_system_t) :: system
+    type(agglomerate_tracker_t) :: tracker
+    type(bond_event_t), allocatable :: events(:)
+    real(wp) :: critical, mu
+    call two_spheres(system, h, 0.0_wp)
+    call check(size(system%pairs) == 1 .and. system%pairs(1)%active, 'mirror: precondition, one current pair record')
+    mu = 0.5_wp * system%bodies(1)%mass
+    critical = sqrt(2.0_wp * escape_energy(system%models%dlvo_model, h, system%pairs(1)%dlvo%chi_eta) / mu)
+    call agglomerate_tracker_create(tracker, system, [1, 1], 1)
+    call two_spheres(system, h, 0.9_wp * critical)
+    call agglomerate_tracker_update(tracker, system, 0.0_wp)
+    call agglomerate_take_events(tracker, events)
+    call check(size(events) == 1 .and. size(tracker%bonds) == 1, 'mirror: receding below v_c, one bond formed')
+    call check_close(events(1)%normal_speed, -0.9_wp * critical, 1.0e-9_wp, 'mirror: formed receding, v_n = -0.9 v_c')
+    call two_spheres(system, h, -0.9_wp * critical)
+    call agglomerate_tracker_update(tracker, system, 1.0e-6_wp)
+    call check(size(tracker%bonds) == 1 .and. tracker%pending == 0, 'mirror: approaching at 0.9 v_c, the bond kept')
+    call two_spheres(system, h, -1.1_wp * critical)
+    call agglomerate_tracker_update(tracker, system, 2.0e-6_wp)
+    call agglomerate_take_events(tracker, events)
+    call check(size(events) == 1 .and. size(tracker%bonds) == 0, 'mirror: approaching above v_c, broken')
+    call check(events(1)%kind == event_broken .and. abs(events(1)%normal_speed - 1.1_wp * critical) <= &
+               1.0e-9_wp * critical .and. abs(events(1)%gap - h) <= 1.0e-6_wp * h, &
+               'mirror: broken approaching at the same gap, v_n = +1.1 v_c (the current values)')
+  end subroutine mirror_states
 end program test_agglomerate_tracking
