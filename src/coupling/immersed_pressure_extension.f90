@@ -13,6 +13,14 @@ module immersed_pressure_extension
   private
   public :: ibm_extend_pressure
 
+  !> The cells near one body's (or one edge plane's) solid nodes, row by row: for the rows (j, k)
+  !> with j = j_first..j_last (unwrapped: the global row is wrap(j)) and k = k_first..k_last (local),
+  !> the cells i = lo(j, k)..hi(j, k) (unwrapped; none when lo > hi).
+  type :: cell_band_t
+    integer :: j_first = 1, j_last = 0, k_first = 1, k_last = 0
+    integer, allocatable :: lo(:, :), hi(:, :)
+  end type cell_band_t
+
 contains
 
   !> The pressure of the sealed cells next to the fluid (collective; call after the projection,
@@ -30,77 +38,82 @@ contains
     type(immersed_boundary_t), intent(inout) :: ibm
     type(fluid_grid_t), intent(inout) :: grid
     real(wp), intent(inout) :: pressure(0:, 0:, 0:)
-    integer :: i, j, k, nx, ny, nzl, d, count
+    integer :: i, j, k, ii, jj, b, nx, ny, nzl, d, count
     real(wp) :: total
     integer, parameter :: step_x(4) = [1, -1, 0, 0], step_y(4) = [0, 0, 1, -1]
-    logical, allocatable :: near_i(:), near_j(:), near_k(:)
+    type(cell_band_t), allocatable :: bands(:)
     nx = grid%nx; ny = grid%ny; nzl = grid%nz_local
     if (.not. allocated(ibm%cell_open)) then
       allocate(ibm%cell_open, ibm%offer_down, ibm%offer_up, mold=pressure)
       ibm%cell_open = 1; ibm%offer_down = 0; ibm%offer_up = 0
     end if
-    ! Only cells within 3 of a solid node are visited (a tensor product of index ranges, like the
-    ! classification's); cell_open stays 1 elsewhere: a body moves less than a cell per step, so
-    ! the cells it sealed before lie in the new range.
-    call near_ranges(ibm, grid, 3, near_i, near_j, near_k)
+    ! Only cells within 3 (in each index) of a solid node are visited, body by body and row by row
+    ! (near_bands); cell_open stays 1 elsewhere: a body moves less than a cell per step, so the
+    ! cells it sealed before lie in its new band. Where bands overlap a cell is visited more than
+    ! once, with the same result: each pass reads only what an earlier pass wrote or what it does
+    ! not change (open cells keep their pressure).
+    call near_bands(ibm, grid, 3, bands)
     associate (su => ibm%geometry%component(1)%status, sv => ibm%geometry%component(2)%status, &
                sw => ibm%geometry%component(3)%status, open => ibm%cell_open)
       ! A cell is open when one of its six faces (u(i-1), u(i), v(j-1), v(j), w(k-1), w(k)) is a fluid node.
-      do k = 1, nzl
-        if (.not. near_k(k)) cycle
-        do j = 1, ny
-          if (.not. near_j(j)) cycle
-          do i = 1, nx
-            if (.not. near_i(i)) cycle
-            open(i, j, k) = merge(1.0_wp, 0.0_wp, su(i - 1, j, k) == node_fluid .or. su(i, j, k) == node_fluid .or. &
-                                  sv(i, j - 1, k) == node_fluid .or. sv(i, j, k) == node_fluid .or. &
-                                  sw(i, j, k - 1) == node_fluid .or. sw(i, j, k) == node_fluid)
+      do b = 1, size(bands)
+        do k = bands(b)%k_first, bands(b)%k_last
+          do jj = bands(b)%j_first, bands(b)%j_last
+            j = wrap(jj, ny)
+            do ii = bands(b)%lo(jj, k), bands(b)%hi(jj, k)
+              i = wrap(ii, nx)
+              open(i, j, k) = merge(1.0_wp, 0.0_wp, su(i - 1, j, k) == node_fluid .or. su(i, j, k) == node_fluid .or. &
+                                    sv(i, j - 1, k) == node_fluid .or. sv(i, j, k) == node_fluid .or. &
+                                    sw(i, j, k - 1) == node_fluid .or. sw(i, j, k) == node_fluid)
+            end do
           end do
         end do
       end do
       call exchange_slab_halos(grid%slab, open)
       ! What each open cell offers its z neighbours (these may be on the next rank).
-      do k = 1, nzl
-        if (.not. near_k(k)) cycle
-        do j = 1, ny
-          if (.not. near_j(j)) cycle
-          do i = 1, nx
-            if (.not. near_i(i)) cycle
-            if (open(i, j, k) > 0.5_wp) then
-              ibm%offer_down(i, j, k) = extrapolated(pressure(i, j, k), pressure(i, j, k + 1), open(i, j, k + 1))
-              ibm%offer_up(i, j, k) = extrapolated(pressure(i, j, k), pressure(i, j, k - 1), open(i, j, k - 1))
-            end if
+      do b = 1, size(bands)
+        do k = bands(b)%k_first, bands(b)%k_last
+          do jj = bands(b)%j_first, bands(b)%j_last
+            j = wrap(jj, ny)
+            do ii = bands(b)%lo(jj, k), bands(b)%hi(jj, k)
+              i = wrap(ii, nx)
+              if (open(i, j, k) > 0.5_wp) then
+                ibm%offer_down(i, j, k) = extrapolated(pressure(i, j, k), pressure(i, j, k + 1), open(i, j, k + 1))
+                ibm%offer_up(i, j, k) = extrapolated(pressure(i, j, k), pressure(i, j, k - 1), open(i, j, k - 1))
+              end if
+            end do
           end do
         end do
       end do
       call exchange_slab_halos(grid%slab, ibm%offer_down, ibm%offer_up)
-      do k = 1, nzl
-        if (.not. near_k(k)) cycle
-        do j = 1, ny
-          if (.not. near_j(j)) cycle
-          do i = 1, nx
-            if (.not. near_i(i)) cycle
-            if (open(i, j, k) > 0.5_wp) cycle
-            total = 0
-            count = 0
-            do d = 1, 4
-              associate (i1 => wrap(i + step_x(d), nx), j1 => wrap(j + step_y(d), ny), &
-                         i2 => wrap(i + 2 * step_x(d), nx), j2 => wrap(j + 2 * step_y(d), ny))
-                if (open(i1, j1, k) > 0.5_wp) then
-                  total = total + extrapolated(pressure(i1, j1, k), pressure(i2, j2, k), open(i2, j2, k))
-                  count = count + 1
-                end if
-              end associate
+      do b = 1, size(bands)
+        do k = bands(b)%k_first, bands(b)%k_last
+          do jj = bands(b)%j_first, bands(b)%j_last
+            j = wrap(jj, ny)
+            do ii = bands(b)%lo(jj, k), bands(b)%hi(jj, k)
+              i = wrap(ii, nx)
+              if (open(i, j, k) > 0.5_wp) cycle
+              total = 0
+              count = 0
+              do d = 1, 4
+                associate (i1 => wrap(i + step_x(d), nx), j1 => wrap(j + step_y(d), ny), &
+                           i2 => wrap(i + 2 * step_x(d), nx), j2 => wrap(j + 2 * step_y(d), ny))
+                  if (open(i1, j1, k) > 0.5_wp) then
+                    total = total + extrapolated(pressure(i1, j1, k), pressure(i2, j2, k), open(i2, j2, k))
+                    count = count + 1
+                  end if
+                end associate
+              end do
+              if (open(i, j, k + 1) > 0.5_wp) then
+                total = total + ibm%offer_down(i, j, k + 1)
+                count = count + 1
+              end if
+              if (open(i, j, k - 1) > 0.5_wp) then
+                total = total + ibm%offer_up(i, j, k - 1)
+                count = count + 1
+              end if
+              if (count > 0) pressure(i, j, k) = total / count
             end do
-            if (open(i, j, k + 1) > 0.5_wp) then
-              total = total + ibm%offer_down(i, j, k + 1)
-              count = count + 1
-            end if
-            if (open(i, j, k - 1) > 0.5_wp) then
-              total = total + ibm%offer_up(i, j, k - 1)
-              count = count + 1
-            end if
-            if (count > 0) pressure(i, j, k) = total / count
           end do
         end do
       end do
@@ -118,57 +131,149 @@ contains
     end function extrapolated
     pure integer function wrap(i, n)
       integer, intent(in) :: i, n
-      wrap = modulo(i - 1, n) + 1
+      if (i >= 1 .and. i <= n) then   ! most indices: no integer division
+        wrap = i
+      else
+        wrap = modulo(i - 1, n) + 1
+      end if
     end function wrap
   end subroutine ibm_extend_pressure
 
-  !> The i, j (global) and k (local, 1..nz_local) indices within `margin` of a ghost or interior
-  !> node of any component on this rank (periodic in i and j).
-  subroutine near_ranges(ibm, grid, margin, near_i, near_j, near_k)
+  !> The cells within `margin` (in each index, periodic in i and j) of the solid nodes: one band per
+  !> body (its ghost and interior nodes of every component on this rank, row by row), and one for
+  !> each of the neighbouring ranks' edge planes (whole rows near their solid nodes: this rank's edge
+  !> cells feed their sealed cells through cell_open and the offers' halo exchange). A sealed cell's
+  !> faces are solid nodes within one index of it, so it and the neighbours it reads lie in the band
+  !> of a body one of its faces belongs to (or in an edge plane's band). A body spans less than half
+  !> the box (immersed_geometry), so its indices unwrap about its first node.
+  subroutine near_bands(ibm, grid, margin, bands)
     type(immersed_boundary_t), intent(in) :: ibm
     type(fluid_grid_t), intent(in) :: grid
     integer, intent(in) :: margin
-    logical, allocatable, intent(out) :: near_i(:), near_j(:), near_k(:)
-    logical, allocatable :: solid_i(:), solid_j(:), solid_k(:)
-    integer :: c, m, s
-    allocate(solid_i(grid%nx), solid_j(grid%ny), solid_k(grid%nz_local))
-    solid_i = .false.; solid_j = .false.; solid_k = .false.
+    type(cell_band_t), allocatable, intent(out) :: bands(:)
+    integer, allocatable :: reference(:, :), lowest(:, :), highest(:, :), lo(:, :), hi(:, :)
+    logical :: edge_j(grid%ny, 2), edge_k(2)
+    integer :: c, m, b, n_bodies, nzl, pass, j, k, n_used, e
+    nzl = grid%nz_local
+    n_bodies = ibm%geometry%n_bodies
+    ! Per body: the reference node (unwrapping), then the unwrapped index ranges, then each row's cells.
+    allocate(reference(3, n_bodies), lowest(3, n_bodies), highest(3, n_bodies), bands(n_bodies + 2))
+    reference = huge(1)
+    lowest = huge(1)
+    highest = -huge(1)
+    do pass = 1, 2
+      if (pass == 2) then
+        do b = 1, n_bodies
+          if (highest(3, b) < lowest(3, b)) cycle
+          allocate(bands(b)%lo(lowest(2, b):highest(2, b), lowest(3, b):highest(3, b)), &
+                   bands(b)%hi(lowest(2, b):highest(2, b), lowest(3, b):highest(3, b)))
+          bands(b)%lo = huge(1)
+          bands(b)%hi = -huge(1)
+        end do
+      end if
+      do c = 1, 3
+        associate (nodes => ibm%geometry%component(c))
+          do m = 1, nodes%n_ghost
+            call mark(nodes%ghost(m)%body, nodes%ghost(m)%node)
+          end do
+          do m = 1, nodes%n_interior
+            call mark(nodes%interior_body(m), nodes%interior(:, m))
+          end do
+        end associate
+      end do
+    end do
+    n_used = 0
+    do b = 1, n_bodies
+      if (highest(3, b) < lowest(3, b)) cycle
+      ! Each row's cells: the solid nodes' range over the rows within the margin, widened by it.
+      allocate(lo(lowest(2, b) - margin:highest(2, b) + margin, lowest(3, b) - margin:highest(3, b) + margin))
+      allocate(hi, mold=lo)
+      lo = huge(1)
+      hi = -huge(1)
+      do k = lowest(3, b), highest(3, b)
+        do j = lowest(2, b), highest(2, b)
+          if (bands(b)%lo(j, k) > bands(b)%hi(j, k)) cycle
+          lo(j - margin:j + margin, k - margin:k + margin) = min(lo(j - margin:j + margin, k - margin:k + margin), &
+                                                                 bands(b)%lo(j, k) - margin)
+          hi(j - margin:j + margin, k - margin:k + margin) = max(hi(j - margin:j + margin, k - margin:k + margin), &
+                                                                 bands(b)%hi(j, k) + margin)
+        end do
+      end do
+      where (lo > hi)   ! an empty row as 1..0 (huge bounds would overflow the loop's trip count)
+        lo = 1
+        hi = 0
+      end where
+      n_used = n_used + 1
+      bands(n_used)%j_first = lbound(lo, 1)
+      bands(n_used)%j_last = ubound(lo, 1)
+      bands(n_used)%k_first = max(1, lbound(lo, 2))
+      bands(n_used)%k_last = min(nzl, ubound(lo, 2))
+      associate (band => bands(n_used))
+        ! (a new allocation with the rows' bounds: an assignment would rebase them to 1)
+        if (allocated(band%lo)) deallocate(band%lo, band%hi)
+        allocate(band%lo(band%j_first:band%j_last, band%k_first:band%k_last), &
+                 band%hi(band%j_first:band%j_last, band%k_first:band%k_last))
+        band%lo = lo(:, band%k_first:band%k_last)
+        band%hi = hi(:, band%k_first:band%k_last)
+      end associate
+      deallocate(lo, hi)
+    end do
+    ! The neighbouring ranks' edge planes: whole rows within the margin of a row with a solid node.
+    edge_j = .false.
+    edge_k = .false.
     do c = 1, 3
-      associate (nodes => ibm%geometry%component(c))
-        do m = 1, nodes%n_ghost
-          call mark(nodes%ghost(m)%node)
+      associate (status => ibm%geometry%component(c)%status)
+        do e = 1, 2
+          k = merge(0, nzl + 1, e == 1)
+          if (all(status(1:grid%nx, 1:grid%ny, k) == node_fluid)) cycle
+          edge_k(e) = .true.
+          edge_j(:, e) = edge_j(:, e) .or. any(status(1:grid%nx, 1:grid%ny, k) /= node_fluid, dim=1)
         end do
-        do m = 1, nodes%n_interior
-          call mark(nodes%interior(:, m))
-        end do
-        ! Solid nodes of the neighbouring ranks' edge planes: this rank's edge cells feed their
-        ! sealed cells (cell_open, offers through the halo exchange).
-        call mark_plane(nodes%status(1:grid%nx, 1:grid%ny, 0), 1)
-        call mark_plane(nodes%status(1:grid%nx, 1:grid%ny, grid%nz_local + 1), grid%nz_local)
       end associate
     end do
-    allocate(near_i(grid%nx), near_j(grid%ny), near_k(grid%nz_local))
-    near_i = solid_i; near_j = solid_j; near_k = solid_k
-    do s = 1, margin
-      near_i = near_i .or. cshift(solid_i, s) .or. cshift(solid_i, -s)
-      near_j = near_j .or. cshift(solid_j, s) .or. cshift(solid_j, -s)
-      near_k(1 + s:) = near_k(1 + s:) .or. solid_k(:grid%nz_local - s)
-      near_k(:grid%nz_local - s) = near_k(:grid%nz_local - s) .or. solid_k(1 + s:)
+    do e = 1, 2
+      if (.not. edge_k(e)) cycle
+      n_used = n_used + 1
+      bands(n_used)%j_first = 1
+      bands(n_used)%j_last = grid%ny
+      bands(n_used)%k_first = merge(1, max(1, nzl - margin), e == 1)
+      bands(n_used)%k_last = merge(min(nzl, 1 + margin), nzl, e == 1)
+      allocate(bands(n_used)%lo(1:grid%ny, bands(n_used)%k_first:bands(n_used)%k_last), &
+               bands(n_used)%hi(1:grid%ny, bands(n_used)%k_first:bands(n_used)%k_last))
+      do j = 1, grid%ny
+        ! A row of the plane within the margin (periodic in j) of a row with a solid node.
+        if (any(edge_j([(wrap_index(j + m, grid%ny), m = -margin, margin)], e))) then
+          bands(n_used)%lo(j, :) = 1
+          bands(n_used)%hi(j, :) = grid%nx
+        else
+          bands(n_used)%lo(j, :) = 1
+          bands(n_used)%hi(j, :) = 0
+        end if
+      end do
     end do
+    bands = bands(1:n_used)
   contains
-    subroutine mark(node)
-      integer, intent(in) :: node(3)
-      solid_i(node(1)) = .true.
-      solid_j(node(2)) = .true.
-      solid_k(node(3)) = .true.
+    !> Pass 1: the reference and the unwrapped ranges of j and k; pass 2: each row's range of i.
+    subroutine mark(body, node)
+      integer, intent(in) :: body, node(3)
+      integer :: unwrapped(3), size_of(3)
+      if (reference(1, body) == huge(1)) reference(:, body) = node
+      size_of = [grid%nx, grid%ny, huge(1) / 4]
+      ! The index nearest the reference among the node's periodic copies (k is local: not wrapped).
+      unwrapped(1:2) = reference(1:2, body) + modulo(node(1:2) - reference(1:2, body) + size_of(1:2) / 2, size_of(1:2)) &
+                       - size_of(1:2) / 2
+      unwrapped(3) = node(3)
+      if (pass == 1) then
+        lowest(:, body) = min(lowest(:, body), unwrapped)
+        highest(:, body) = max(highest(:, body), unwrapped)
+      else
+        bands(body)%lo(unwrapped(2), unwrapped(3)) = min(bands(body)%lo(unwrapped(2), unwrapped(3)), unwrapped(1))
+        bands(body)%hi(unwrapped(2), unwrapped(3)) = max(bands(body)%hi(unwrapped(2), unwrapped(3)), unwrapped(1))
+      end if
     end subroutine mark
-    subroutine mark_plane(status, k)
-      integer(int8), intent(in) :: status(:, :)
-      integer, intent(in) :: k
-      if (all(status == node_fluid)) return
-      solid_i = solid_i .or. any(status /= node_fluid, dim=2)
-      solid_j = solid_j .or. any(status /= node_fluid, dim=1)
-      solid_k(k) = .true.
-    end subroutine mark_plane
-  end subroutine near_ranges
+    pure integer function wrap_index(i, n)
+      integer, intent(in) :: i, n
+      wrap_index = modulo(i - 1, n) + 1
+    end function wrap_index
+  end subroutine near_bands
 end module immersed_pressure_extension
