@@ -409,6 +409,37 @@ def collision_rates(run):
     return {f"{run.shape}-{run.shape}": inside / span / volume}
 
 
+def _deck_number(run, name):
+    """The value of `name = number` in the run's run.nml (the first occurrence), else None."""
+    import re
+    try:
+        with open(run.path("run.nml")) as handle:
+            text = handle.read()
+    except OSError:
+        return None
+    match = re.search(rf"\b{name}\s*=\s*([-+0-9.]+(?:[eEdD][-+]?[0-9]+)?)", text, re.I)
+    return float(match.group(1).replace("d", "e").replace("D", "e")) if match else None
+
+
+def saffman_turner_kernel(run):
+    """Saffman & Turner's (1956) collision kernel of equal spheres that follow the flow, for the run's
+    sphere radius r and flow: sqrt(8 pi / 15) (2 r)^3 sqrt(eps / nu) (m^3/s), eps the mean of the
+    dissipation column of fluid_statistics.dat over the run, nu the deck's &fluid viscosity. None
+    for other shapes or without a fluid."""
+    import numpy as np
+    if run.shape != "sphere" or not run.radius or not os.path.exists(run.path("fluid_statistics.dat")):
+        return None
+    viscosity = _deck_number(run, "viscosity")
+    try:
+        table = np.atleast_2d(np.loadtxt(run.path("fluid_statistics.dat"), comments="#"))
+    except ValueError:
+        return None
+    if viscosity is None or table.size == 0 or table.shape[1] < 5:
+        return None
+    dissipation = float(np.mean(table[:, 4]))
+    return math.sqrt(8.0 * math.pi / 15.0) * (2.0 * run.radius) ** 3 * math.sqrt(dissipation / viscosity)
+
+
 def collision_kernel(run, rates):
     """Collision kernel (m^3/s) of a run of one species: the rate per unit volume over the pairs per
     unit volume, Gamma / (n^2 / 2) with n = N / V (Saffman & Turner 1956 define the rate so), the
@@ -465,6 +496,15 @@ def group_statistics(members, times, rg_kind):
     kernels = [k for k in kernels if k is not None]
     stats["collision_kernel"] = dict(zip(("mean", "low", "high"), mean_interval(kernels))) \
         if kernels and len(names) == 1 else None
+    # Ghost spheres that follow the flow against Saffman & Turner: each run's kernel over its own
+    # reference (the runs' flows may differ in dissipation).
+    ratios = []
+    for run, rates in zip(members, per_run):
+        kernel, reference = collision_kernel(run, rates), saffman_turner_kernel(run)
+        if kernel is not None and reference:
+            ratios.append(kernel / reference)
+    stats["kernel_over_saffman_turner"] = dict(zip(("mean", "low", "high"), mean_interval(ratios))) \
+        if ratios and len(names) == 1 else None
     return stats, arrays
 
 
@@ -478,7 +518,8 @@ TABLE_COLUMNS = ("group", "runs", "final_time",
                  "bonds", "bonds_low", "bonds_high", "largest",
                  "fractal_dimension", "fractal_low", "fractal_high", "fractal_clusters",
                  "psi_mean", "psi_median", "psi_bond_rows", "collision_kernel", "collision_kernel_low",
-                 "collision_kernel_high", "collision_rates")
+                 "collision_kernel_high", "kernel_over_saffman_turner", "kernel_over_saffman_turner_low",
+                 "kernel_over_saffman_turner_high", "collision_rates")
 
 
 def table_row(group, stats):
@@ -498,6 +539,10 @@ def table_row(group, stats):
         kernel = stats["collision_kernel"]
         row.update(collision_kernel=kernel["mean"], collision_kernel_low=kernel["low"],
                    collision_kernel_high=kernel["high"])
+    if stats.get("kernel_over_saffman_turner"):
+        ratio = stats["kernel_over_saffman_turner"]
+        row.update(kernel_over_saffman_turner=ratio["mean"], kernel_over_saffman_turner_low=ratio["low"],
+                   kernel_over_saffman_turner_high=ratio["high"])
     row["collision_rates"] = "; ".join(f"{name} {value['mean']:.6g} [{value['low']:.6g}, {value['high']:.6g}]"
                                        for name, value in stats["collision_rate"].items())
     return row
@@ -795,6 +840,9 @@ def print_table(table):
         if row["collision_kernel"] != "":
             print(f"{'':<{width}} collision kernel (m^3/s): "
                   f"{triple(row, 'collision_kernel', 'collision_kernel_low', 'collision_kernel_high')}")
+        if row["kernel_over_saffman_turner"] != "":
+            print(f"{'':<{width}} kernel / Saffman-Turner: "
+                  f"{triple(row, 'kernel_over_saffman_turner', 'kernel_over_saffman_turner_low', 'kernel_over_saffman_turner_high', '.3f')}")
 
 
 def print_comparison(rows, rungs):

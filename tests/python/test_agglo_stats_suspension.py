@@ -11,7 +11,7 @@ import pytest
 
 from agglo_suspension import fractal_dimension, mean_interval, t_quantile
 from conftest import AGGLO_STATS, run_tool
-from synthetic_suspension import Row, gyration_full, line, square, write_run
+from synthetic_suspension import Row, gyration_full, line, square, write_particles, write_run
 
 RADIUS = 50e-6
 TIMES = [0.0, 1e-3, 2e-3, 3e-3]
@@ -167,6 +167,29 @@ def test_collision_kernel_and_the_efficiency_against_ghost_collisions(spaced_tmp
     rows = {r["quantity"]: r for r in read_csv(out / "suspension_comparison.csv")}
     assert float(rows["collision_kernel"]["ratio"]) == pytest.approx(0.25, rel=1e-6)   # the efficiency
     assert "collision kernel (m^3/s): 8e-10 [8e-10, 8e-10]" in result.stdout
+
+
+def test_ghost_kernel_against_saffman_turner(spaced_tmp):
+    # Spheres of r = 5 um, nu = 1e-6 m^2/s, dissipation rows 0.01 and 0.03 (mean 0.02): Saffman &
+    # Turner (1956) give sqrt(8 pi / 15) (2 r)^3 sqrt(eps / nu) = 1.2965 x 1e-15 x 141.42 m^3/s. A
+    # rate of 1.5 times that kernel times n^2 / 2 (n = 100 per mm^3) must come back as 1.5.
+    reference = math.sqrt(8.0 * math.pi / 15.0) * (1.0e-5) ** 3 * math.sqrt(0.02 / 1.0e-6)
+    times = np.linspace(0.0, 1e-3, 3)
+    rate = 1.5 * reference * 0.5 * 1e11 ** 2
+    for k in (1, 2):
+        run = spaced_tmp / "sphere-ghost" / f"run_{k:04d}"
+        counts = np.array([[rate * 1e-9 * t] for t in times])
+        write_run(str(run), list(times), [Row(100)] * 3, seed=k, counts=counts)
+        write_particles(str(run / "particles.h5"), list(times), np.zeros((3, 100, 3)), seed=k, radius=5e-6)
+        (run / "run.nml").write_text("&fluid\n  viscosity = 1.0e-6\n/\n")
+        (run / "fluid_statistics.dat").write_text("# step time dt kinetic_energy dissipation\n"
+                                                  "0 0.0 0.0 1e-5 0.01\n100 1e-3 1e-5 1e-5 0.03\n")
+    out = spaced_tmp / "stats"
+    result = run_tool([AGGLO_STATS, spaced_tmp / "sphere-ghost", "-o", out, "--group-by", "batch", "--no-figures"])
+    assert result.returncode == 0, result.stderr + result.stdout
+    table = {row["group"]: row for row in read_csv(out / "suspension_table.csv")}
+    assert float(table["sphere-ghost"]["kernel_over_saffman_turner"]) == pytest.approx(1.5, rel=1e-6)
+    assert "kernel / Saffman-Turner: 1.500" in result.stdout
 
 
 def test_suspension_options_are_refused_for_pair_batches(spaced_tmp):
