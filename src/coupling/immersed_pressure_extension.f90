@@ -238,6 +238,8 @@ contains
       bands(n_used)%j_last = grid%ny
       bands(n_used)%k_first = merge(1, max(1, nzl - margin), e == 1)
       bands(n_used)%k_last = merge(min(nzl, 1 + margin), nzl, e == 1)
+      ! (the slot may still hold the unwrapped rows of a body moved down past a body without nodes)
+      if (allocated(bands(n_used)%lo)) deallocate(bands(n_used)%lo, bands(n_used)%hi)
       allocate(bands(n_used)%lo(1:grid%ny, bands(n_used)%k_first:bands(n_used)%k_last), &
                bands(n_used)%hi(1:grid%ny, bands(n_used)%k_first:bands(n_used)%k_last))
       do j = 1, grid%ny
