@@ -2,11 +2,12 @@
 # A suspension (&scene particles = 'suspension'; docs/scenes.md, "Suspension") restarts bit for bit
 # and gives the same run on 1 and 2 ranks at every rung, with bodies crossing the boundary between
 # the ranks' slabs (z = L/2 on 2 ranks) and the periodic wrap, with $AGGLO:
-#  - 'none': the smallest deck (input/suspension_sphere_none.nml, 95 spheres in vacuum) for 4000
-#    steps: bodies cross the periodic wrap after the restart step (particles.h5 rows 500 steps
-#    apart); 1 and 2 ranks give the same particles.h5 and last checkpoint bit for bit (every rank
-#    does the same arithmetic: no fluid, the particle system on every rank); on 2 ranks 2000
-#    steps + &run restart to 4000 give them bit for bit;
+#  - 'none' and 'stokes': the smallest deck (input/suspension_sphere_none.nml, 95 spheres in vacuum;
+#    in fluid at rest with 0.5 m/s rms start velocities) for 4000 steps: bodies cross the periodic
+#    wrap after the restart step (particles.h5 rows 500 steps apart); 1 and 2 ranks give the same
+#    particles.h5 and last checkpoint bit for bit (every rank does the same arithmetic: no fluid
+#    grid, the particle system on every rank); on 2 ranks 2000 steps + &run restart to 4000 give
+#    them bit for bit;
 #  - 'point' and 'resolved': 10 calcite spheres (radius 40 um, D/dx = 5.1 at 32^3 in a 0.5 mm box)
 #    in a random solenoidal field (10 mm/s), random velocities of 0.1 m/s rms on top of the
 #    fluid's, 16 fluid steps of 10 us with a particles.h5 row per fluid step. Seed 41 places a
@@ -19,7 +20,7 @@
 #    (position, quaternion, velocity, angular velocity, hydrodynamic force and torque; measured
 #    about 1e-14: round-off of the sums over the slabs, as tests/mpi/test_free_bodies_runs.sh).
 # Prints PASS/FAIL lines; works in a temporary directory.
-# checks: 9
+# checks: 12
 set -u
 AGGLO=${AGGLO:?AGGLO must be the agglo executable}
 root=$(cd "$(dirname "$0")/../.." && pwd)
@@ -36,38 +37,45 @@ ran() { # label, output files...
   done
 }
 
-# --- 'none': the smallest deck ---
+# --- 'none' and 'stokes': the smallest deck, in vacuum and in fluid at rest ---
 deck=$root/input/suspension_sphere_none.nml
-common=(--set run.end_time=1.0 --set output.checkpoint_interval=2000 --set output.particle_interval=500)
-"$AGGLO" "$deck" "${common[@]}" --set run.max_steps=4000 --set "output.directory='none1'" > none1.out 2>&1
-mpirun -np 2 "$AGGLO" "$deck" "${common[@]}" --set run.max_steps=4000 --set "output.directory='none2'" > none2.out 2>&1
-mpirun -np 2 "$AGGLO" "$deck" "${common[@]}" --set run.max_steps=2000 --set "output.directory='none2split'" \
-  > none2split1.out 2>&1
-mpirun -np 2 "$AGGLO" "$deck" "${common[@]}" --set run.max_steps=4000 --set "output.directory='none2split'" \
-  --set run.restart=.true. > none2split2.out 2>&1
-if failed=$(ran none none1.out none2.out none2split1.out none2split2.out); then
-  "$python" - <<'PY'
-import h5py, numpy as np
-f = h5py.File('none2/particles.h5', 'r')
+for rung in none stokes; do
+  common=(--set run.end_time=1.0 --set output.checkpoint_interval=2000 --set output.particle_interval=500)
+  # In fluid at rest the spheres relax in 1.5 ms (2 rho_p a^2 / (9 mu)): 0.5 m/s rms carries some across the wrap.
+  [ "$rung" = stokes ] && common+=(--set "scene.fluid='stokes'" --set suspension.velocity_rms=0.5)
+  "$AGGLO" "$deck" "${common[@]}" --set run.max_steps=4000 --set "output.directory='${rung}1'" > ${rung}1.out 2>&1
+  mpirun -np 2 "$AGGLO" "$deck" "${common[@]}" --set run.max_steps=4000 --set "output.directory='${rung}2'" \
+    > ${rung}2.out 2>&1
+  mpirun -np 2 "$AGGLO" "$deck" "${common[@]}" --set run.max_steps=2000 --set "output.directory='${rung}2split'" \
+    > ${rung}2split1.out 2>&1
+  mpirun -np 2 "$AGGLO" "$deck" "${common[@]}" --set run.max_steps=4000 --set "output.directory='${rung}2split'" \
+    --set run.restart=.true. > ${rung}2split2.out 2>&1
+  if failed=$(ran $rung ${rung}1.out ${rung}2.out ${rung}2split1.out ${rung}2split2.out); then
+    "$python" - "$rung" <<'PY'
+import sys, h5py, numpy as np
+rung = sys.argv[1]
+f = h5py.File(f'{rung}2/particles.h5', 'r')
 z = f['suspension/position'][:].reshape(len(f['time']), 95, 3)
 jumps = np.abs(np.diff(z, axis=0)) > 0.5e-3        # (row, body, axis): a wrap between two rows
 after = int(jumps[4:].any(axis=2).sum())           # rows 4 on: after step 2000, the restart
 print(('PASS' if after > 0 and len(f['time']) == 9 else 'FAIL') +
-      f' suspension_ranks/none_bodies_cross_the_wrap_after_the_restart  ({after} crossings after step 2000,'
+      f' suspension_ranks/{rung}_bodies_cross_the_wrap_after_the_restart  ({after} crossings after step 2000,'
       f' {int(jumps.any(axis=2).sum())} in all)')
 PY
-  if h5diff -q none1/particles.h5 none2/particles.h5 && \
-     h5diff -q none1/checkpoints/checkpoint_0000004000.h5 none2/checkpoints/checkpoint_0000004000.h5; then
-    echo "PASS suspension_ranks/none_1_and_2_ranks_bit_for_bit  (particles.h5 and the 4000-step checkpoint)"
-  else echo "FAIL suspension_ranks/none_1_and_2_ranks_bit_for_bit"; fi
-  if h5diff -q none2/particles.h5 none2split/particles.h5 && \
-     h5diff -q none2/checkpoints/checkpoint_0000004000.h5 none2split/checkpoints/checkpoint_0000004000.h5; then
-    echo "PASS suspension_ranks/none_restart_bit_for_bit_2_ranks  (2000 + 2000 steps: particles.h5 and the last checkpoint)"
-  else echo "FAIL suspension_ranks/none_restart_bit_for_bit_2_ranks"; fi
-else
-  for check in none_bodies_cross_the_wrap_after_the_restart none_1_and_2_ranks_bit_for_bit \
-               none_restart_bit_for_bit_2_ranks; do echo "FAIL suspension_ranks/$check: $failed"; done
-fi
+    if h5diff -q ${rung}1/particles.h5 ${rung}2/particles.h5 && \
+       h5diff -q ${rung}1/checkpoints/checkpoint_0000004000.h5 ${rung}2/checkpoints/checkpoint_0000004000.h5; then
+      echo "PASS suspension_ranks/${rung}_1_and_2_ranks_bit_for_bit  (particles.h5 and the 4000-step checkpoint)"
+    else echo "FAIL suspension_ranks/${rung}_1_and_2_ranks_bit_for_bit"; fi
+    if h5diff -q ${rung}2/particles.h5 ${rung}2split/particles.h5 && \
+       h5diff -q ${rung}2/checkpoints/checkpoint_0000004000.h5 ${rung}2split/checkpoints/checkpoint_0000004000.h5; then
+      echo "PASS suspension_ranks/${rung}_restart_bit_for_bit_2_ranks  (2000 + 2000 steps: particles.h5 and the last checkpoint)"
+    else echo "FAIL suspension_ranks/${rung}_restart_bit_for_bit_2_ranks"; fi
+  else
+    for check in bodies_cross_the_wrap_after_the_restart 1_and_2_ranks_bit_for_bit restart_bit_for_bit_2_ranks; do
+      echo "FAIL suspension_ranks/${rung}_$check: $failed"
+    done
+  fi
+done
 
 # --- 'point' and 'resolved': spheres crossing the slab boundary and the wrap ---
 cat > crossing.nml <<'NML'
