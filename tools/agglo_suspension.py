@@ -593,6 +593,7 @@ def _figures(groups, results, runs, out, times, snapshot_time):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    import matplotlib.ticker
     import numpy as np
     written = []
     colours = {group: f"C{k % 10}" for k, group in enumerate(groups)}
@@ -632,6 +633,10 @@ def _figures(groups, results, runs, out, times, snapshot_time):
                     axis.plot(size, count / count.sum(), "o-", color=colours[group], label=group, markersize=3)
             axis.set_xscale("log")
             axis.set_yscale("log")
+            # Sizes are integers, often within a decade: labelled ticks at 1, 2, 5, 10, 20, ...
+            axis.xaxis.set_major_locator(matplotlib.ticker.LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+            axis.xaxis.set_major_formatter(matplotlib.ticker.FormatStrFormatter("%g"))
+            axis.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
             axis.set_xlabel("cluster size s")
             axis.set_title(f"t = {t * 1e3:g} ms", fontsize=9)
             if axis.get_legend_handles_labels()[0]:
