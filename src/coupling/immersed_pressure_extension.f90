@@ -8,6 +8,7 @@ module immersed_pressure_extension
   use fluid_grid, only: fluid_grid_t
   use halo_exchange, only: exchange_slab_halos
   use immersed_geometry, only: node_fluid
+  use immersed_nodes, only: wrap
   use immersed_boundary, only: immersed_boundary_t
   implicit none
   private
@@ -129,14 +130,6 @@ contains
         value = p1
       end if
     end function extrapolated
-    pure integer function wrap(i, n)
-      integer, intent(in) :: i, n
-      if (i >= 1 .and. i <= n) then   ! most indices: no integer division
-        wrap = i
-      else
-        wrap = modulo(i - 1, n) + 1
-      end if
-    end function wrap
   end subroutine ibm_extend_pressure
 
   !> The cells within `margin` (in each index, periodic in i and j) of the solid nodes: one band per
@@ -244,7 +237,7 @@ contains
                bands(n_used)%hi(1:grid%ny, bands(n_used)%k_first:bands(n_used)%k_last))
       do j = 1, grid%ny
         ! A row of the plane within the margin (periodic in j) of a row with a solid node.
-        if (any(edge_j([(wrap_index(j + m, grid%ny), m = -margin, margin)], e))) then
+        if (any(edge_j([(wrap(j + m, grid%ny), m = -margin, margin)], e))) then
           bands(n_used)%lo(j, :) = 1
           bands(n_used)%hi(j, :) = grid%nx
         else
@@ -273,9 +266,5 @@ contains
         bands(body)%hi(unwrapped(2), unwrapped(3)) = max(bands(body)%hi(unwrapped(2), unwrapped(3)), unwrapped(1))
       end if
     end subroutine mark
-    pure integer function wrap_index(i, n)
-      integer, intent(in) :: i, n
-      wrap_index = modulo(i - 1, n) + 1
-    end function wrap_index
   end subroutine near_bands
 end module immersed_pressure_extension
