@@ -399,10 +399,15 @@ contains
     end function progress_detail
 
     !> The provider's loads of the current state, or none before the first collision with &pair
-    !> hydrodynamics_from = 'first_contact' (the fluid sees the moving bodies all the same).
+    !> hydrodynamics_from = 'first_contact' (the fluid sees the moving bodies all the same). The
+    !> sub-grid lubrication is the unresolved part of the same fluid's force, so it waits for the
+    !> first collision too (docs/theory.md, "Sub-grid lubrication").
     subroutine felt_loads(theta)
       real(wp), intent(in) :: theta
-      if (cfg%pair%hydrodynamics_from == 'first_contact' .and. summary%collisions == 0) then
+      logical :: felt
+      felt = .not. (cfg%pair%hydrodynamics_from == 'first_contact' .and. summary%collisions == 0)
+      system%models%lubrication = cfg%collision%lubrication .and. felt
+      if (.not. felt) then
         hydrodynamic = particle_loads_zero(system%n)
       else if (near_only .and. allocated(system%members)) then
         call hydrodynamics%member_loads(system, theta, near%members(1:near%count), hydrodynamic)
