@@ -393,6 +393,9 @@ contains
         call input_error('collision', 'lubrication_roughness', real_text(cfg%collision%lubrication_roughness), &
           '< the hand-over gap lubrication_handover * &grid spacing = '// &
           real_text(cfg%collision%lubrication_handover * smallest_spacing(cfg%grid))//' m')
+    else if (cfg%collision%lubrication_tangential) then
+      call input_error('collision', 'lubrication_tangential', '.true. with lubrication = .false.', &
+          '.false., or lubrication = .true. (the tangential terms belong to the sub-grid lubrication model)')
     end if
   end subroutine check_particle_cross
 

@@ -22,6 +22,8 @@ module config_collision
     !> scheme, set when the deck is parsed (config_reader)
     real(wp) :: lubrication_handover = 0.0_wp
     real(wp) :: lubrication_roughness = 1.0e-9_wp   !< m, h_in: the force saturates below this gap
+    !> the tangential and rotational log(1/xi) terms too (particles/lubrication.f90; docs/theory.md)
+    logical :: lubrication_tangential = .false.
     !> cap on the sequential-impulse sweeps of one interaction (several simultaneous contacts)
     integer :: max_impulse_sweeps = 200
   end type collision_config_t
@@ -29,10 +31,10 @@ module config_collision
   real(wp) :: restitution, friction_coefficient, detection_floor, detection_factor, lubrication_handover, &
               lubrication_roughness
   character(len=16) :: model
-  logical :: lubrication
+  logical :: lubrication, lubrication_tangential
   integer :: max_impulse_sweeps
   namelist /collision/ restitution, model, friction_coefficient, detection_floor, detection_factor, lubrication, &
-                       lubrication_handover, lubrication_roughness, max_impulse_sweeps
+                       lubrication_handover, lubrication_roughness, lubrication_tangential, max_impulse_sweeps
 
 contains
 
@@ -67,6 +69,7 @@ contains
     detection_floor = cfg%detection_floor; detection_factor = cfg%detection_factor
     lubrication = cfg%lubrication; lubrication_handover = cfg%lubrication_handover
     lubrication_roughness = cfg%lubrication_roughness
+    lubrication_tangential = cfg%lubrication_tangential
     max_impulse_sweeps = cfg%max_impulse_sweeps
   end subroutine to_namelist
 
@@ -76,6 +79,7 @@ contains
     cfg%detection_floor = detection_floor; cfg%detection_factor = detection_factor
     cfg%lubrication = lubrication; cfg%lubrication_handover = lubrication_handover
     cfg%lubrication_roughness = lubrication_roughness
+    cfg%lubrication_tangential = lubrication_tangential
     cfg%max_impulse_sweeps = max_impulse_sweeps
   end subroutine from_namelist
 

@@ -34,6 +34,22 @@
 !> The force reported is j n / dt. Linear and angular momentum are conserved exactly; the kinetic
 !> energy never grows (the impulse only damps v_n). With the bodies' added masses (module
 !> collision) K_c and the kick carry them as a collision does.
+!>
+!> Tangential and rotational modes (model%tangential, &collision lubrication_tangential): the
+!> log(1/xi) terms of the shear and rotation resistances of two spheres near contact (Jeffrey &
+!> Onishi 1984, functions Y^A, Y^B, Y^C; Kim & Karrila 1991, ch. 11). For equal spheres of radius a
+!> they are exactly a force against the slip s_t (the tangential part of u1(x_c) - u2(x_c), the two
+!> surfaces' relative velocity at the gap) plus a torque against the tangential relative rotation
+!> (omega1 - omega2)_t:
+!>   F_2 = +R_s(h) s_t (-F_2 on body 1, at x_c),  R_s = 6 pi mu a1 g_YA(l) L(h),
+!>   T_2 = +R_r(h) (omega1 - omega2)_t = -T_1,       R_r = (3/5) pi mu a_r^3 L(h),
+!> with g_YA = (4/15) l (2 + l + 2 l^2) / (1 + l)^3 (1/6 for equal spheres), L the sub-grid part of
+!> ln(1/xi) (hand-over and roughness as for R_sub), a_r = 2 a1 a2 / (a1 + a2). For equal spheres
+!> they reproduce Y^A_11 = Y^A_12 magnitude 1/6, Y^B_11 = 1/4, Y^C_11 = 1/5 and Y^C_12 = 1/20
+!> (Jeffrey & Onishi's normalisations) exactly; R_s is exact for the relative translation of
+!> unequal spheres, the rotation couplings of unequal radii (and of spheroids, through their mean
+!> radii of curvature) are approximated by the equal-sphere form. Each is applied as an implicit
+!> impulse along its own direction (damping only; momentum and angular momentum conserved).
 module lubrication
   use agglo_kinds, only: wp
   use physical_constants, only: pi
@@ -41,7 +57,7 @@ module lubrication
   use quaternion, only: rotation_matrix
   use spheroid, only: spheroid_t, principal_curvatures, principal_directions
   use rigid_body, only: rigid_body_t, added_inertia_t, point_velocity, inverse_inertia_lab, inverse_mass_lab, &
-                        rigid_body_kick
+                        rigid_body_kick, angular_velocity_lab
   use closest_points, only: closest_points_t
   use collision, only: contact_matrix, isotropic_inverse_mass
   use config_collision, only: collision_config_t
@@ -49,12 +65,13 @@ module lubrication
   implicit none
   private
   public :: lubrication_setup, lubrication_model_t, lubrication_geometry_t, lubrication_result_t, lubrication_geometry, &
-            lubrication_resistance, lubrication_subgrid_resistance, lubricate
+            lubrication_resistance, lubrication_subgrid_resistance, lubrication_tangential_resistances, lubricate
 
   type :: lubrication_model_t
     real(wp) :: dynamic_viscosity = 1.0e-3_wp   !< Pa s, mu
     real(wp) :: outer_gap = 0.0_wp              !< m, h_out: the grid resolves the squeeze flow above it
     real(wp) :: roughness = 1.0e-9_wp           !< m, h_in: the force saturates below this gap
+    logical :: tangential = .false.             !< the shear and rotation modes' log(1/xi) terms too
   end type lubrication_model_t
 
   !> Local geometry of the pair at its closest points.
@@ -72,6 +89,8 @@ module lubrication
     real(wp) :: point(3) = 0.0_wp         !< m, x_c
     real(wp) :: torque1(3) = 0.0_wp       !< N m, about the centre of body 1
     real(wp) :: torque2(3) = 0.0_wp       !< N m, about the centre of body 2
+    real(wp) :: shear_resistance = 0.0_wp     !< N s/m, R_s (model%tangential)
+    real(wp) :: rotation_resistance = 0.0_wp  !< N m s, R_r (model%tangential)
     type(lubrication_geometry_t) :: geometry
   end type lubrication_result_t
 
@@ -88,9 +107,11 @@ contains
     model%dynamic_viscosity = dynamic_viscosity
     model%outer_gap = cfg%lubrication_handover * grid_spacing
     model%roughness = cfg%lubrication_roughness
+    model%tangential = cfg%lubrication_tangential
     write(line, '(a,es11.4,a,f6.3,a,es11.4,a)') 'lubrication: sub-grid squeeze force below h_out = ', model%outer_gap, &
         ' m (', cfg%lubrication_handover, ' cells), saturated below h_in = ', model%roughness, ' m'
     call log_line(trim(line))
+    if (model%tangential) call log_line('lubrication: with the tangential and rotational log(1/xi) terms')
   end subroutine lubrication_setup
 
   !> R_eff, a1, a2 from the principal curvatures of both surfaces at the closest points, projected on
@@ -173,6 +194,28 @@ contains
                                      - max(0.0_wp, lubrication_resistance(model, geometry, model%outer_gap)))
   end function lubrication_subgrid_resistance
 
+  !> [R_s, R_r]: the shear (N s/m) and relative-rotation (N m s) resistances of the tangential modes
+  !> below h_out (module header), zero at and above it.
+  pure function lubrication_tangential_resistances(model, geometry, gap) result(resistances)
+    type(lubrication_model_t), intent(in) :: model
+    type(lubrication_geometry_t), intent(in) :: geometry
+    real(wp), intent(in) :: gap
+    real(wp) :: resistances(2), l, a1, a2, log_sub, rotation_radius
+    resistances = 0.0_wp
+    if (gap >= model%outer_gap) return
+    a1 = geometry%radius1
+    a2 = geometry%radius2
+    l = a2 / a1
+    ! ln(1/xi) below the hand-over, saturated at the roughness gap; never negative (xi > 1 far out).
+    log_sub = max(0.0_wp, log((a1 + a2) / (2.0_wp * max(gap, model%roughness)))) &
+              - max(0.0_wp, log((a1 + a2) / (2.0_wp * model%outer_gap)))
+    log_sub = max(0.0_wp, log_sub)
+    rotation_radius = 2.0_wp * a1 * a2 / (a1 + a2)
+    resistances(1) = 6.0_wp * pi * model%dynamic_viscosity * a1 &
+                     * (4.0_wp / 15.0_wp) * l * (2.0_wp + l + 2.0_wp * l**2) / (1.0_wp + l)**3 * log_sub
+    resistances(2) = 0.6_wp * pi * model%dynamic_viscosity * rotation_radius**3 * log_sub
+  end function lubrication_tangential_resistances
+
   !> Apply the lubrication impulse of one step dt to both bodies (implicit in v_n; module header).
   pure subroutine lubricate(model, shape1, body1, shape2, body2, contact, dt, result, added1, added2)
     type(lubrication_model_t), intent(in) :: model
@@ -205,5 +248,51 @@ contains
     result%torque2 = cross(r2, result%force)
     call rigid_body_kick(body1, -result%force, result%torque1, dt, added1)
     call rigid_body_kick(body2, result%force, result%torque2, dt, added2)
+    if (model%tangential) call lubricate_tangential(model, body1, body2, contact%gap, n, r1, r2, inverse_mass, dt, &
+                                                    result, added1, added2)
   end subroutine lubricate
+
+  !> The tangential modes' impulses after the normal one (module header): against the slip s_t at
+  !> x_c and the relative rotation (omega1 - omega2)_t, each implicit along its own direction
+  !> (j = R dt w / (1 + R dt e^T K e), w the speed, e its direction, K the pair's compliance for it).
+  pure subroutine lubricate_tangential(model, body1, body2, gap, n, r1, r2, inverse_mass, dt, result, added1, added2)
+    type(lubrication_model_t), intent(in) :: model
+    type(rigid_body_t), intent(inout) :: body1, body2
+    real(wp), intent(in) :: gap                       !< m, the surface gap h
+    real(wp), intent(in) :: n(3), r1(3), r2(3)        !< the unit normal 1 -> 2; x_c - x_1, x_c - x_2
+    real(wp), intent(in) :: inverse_mass(3, 3), dt    !< the pair's summed inverse (added) masses; s
+    type(lubrication_result_t), intent(inout) :: result
+    type(added_inertia_t), intent(in), optional :: added1, added2
+    real(wp) :: resistances(2), slip(3), spin(3), speed, e(3), k(3, 3), inverse_inertia(3, 3), j, force(3), torque(3)
+    resistances = lubrication_tangential_resistances(model, result%geometry, gap)
+    result%shear_resistance = resistances(1)
+    result%rotation_resistance = resistances(2)
+    slip = point_velocity(body1, result%point) - point_velocity(body2, result%point)
+    slip = slip - dot_product(slip, n) * n
+    speed = norm2(slip)
+    if (resistances(1) > 0.0_wp .and. speed > 0.0_wp) then
+      e = slip / speed
+      k = contact_matrix(inverse_mass, inverse_inertia_lab(body1, added1), r1, inverse_inertia_lab(body2, added2), r2)
+      j = resistances(1) * dt * speed / (1.0_wp + resistances(1) * dt * dot_product(e, matmul(k, e)))
+      force = j / dt * e
+      call rigid_body_kick(body1, -force, cross(r1, -force), dt, added1)
+      call rigid_body_kick(body2, force, cross(r2, force), dt, added2)
+      result%force = result%force + force
+      result%torque1 = result%torque1 + cross(r1, -force)
+      result%torque2 = result%torque2 + cross(r2, force)
+    end if
+    spin = angular_velocity_lab(body1) - angular_velocity_lab(body2)
+    spin = spin - dot_product(spin, n) * n
+    speed = norm2(spin)
+    if (resistances(2) > 0.0_wp .and. speed > 0.0_wp) then
+      e = spin / speed
+      inverse_inertia = inverse_inertia_lab(body1, added1) + inverse_inertia_lab(body2, added2)
+      j = resistances(2) * dt * speed / (1.0_wp + resistances(2) * dt * dot_product(e, matmul(inverse_inertia, e)))
+      torque = j / dt * e
+      call rigid_body_kick(body1, [0.0_wp, 0.0_wp, 0.0_wp], -torque, dt, added1)
+      call rigid_body_kick(body2, [0.0_wp, 0.0_wp, 0.0_wp], torque, dt, added2)
+      result%torque1 = result%torque1 - torque
+      result%torque2 = result%torque2 + torque
+    end if
+  end subroutine lubricate_tangential
 end module lubrication

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# checks: 29
+# checks: 30
 # Bad &dlvo / &collision / &pair integrator input is rejected before anything runs, with a message
 # naming the group, the variable, the value and the allowed range (docs/decks.md). Each case runs
 # $AGGLO on a small fluid-free pair deck and greps the error; the defaults must pass the checks.
@@ -58,6 +58,9 @@ expect_deck_error lubrication_roughness_zero 1 "$stokes
 expect_deck_error lubrication_handover_negative 1 "$stokes
 &collision lubrication = .true., lubrication_handover = -1.0 /" \
   "&collision lubrication_handover = -1.00000E+00 is not allowed; allowed: > 0"
+expect_deck_error lubrication_tangential_without_lubrication 1 "$stokes
+&collision lubrication_tangential = .true. /" \
+  "&collision lubrication_tangential = .true. with lubrication = .false. is not allowed"
 expect_deck_error lubrication_roughness_vs_handover 1 "$stokes
 &collision lubrication = .true., lubrication_roughness = 1.0e-4 /" \
   "&collision lubrication_roughness = 1.00000E-04 is not allowed; allowed: < the hand-over gap"

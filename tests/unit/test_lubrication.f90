@@ -1,12 +1,13 @@
-! checks: 47
+! checks: 59
 !> Unit tests of the sub-grid lubrication (src/particles/lubrication.f90; docs/theory.md, "Sub-grid
 !> lubrication"): the resistance of two spheres against the near-contact expansion written out by
 !> hand and against Brenner's exact series, the curvature-based reduced radius of a sphere facing a
 !> needle (equator and tip), saturation below the roughness, nothing above the hand-over gap,
 !> Newton's third law and momentum conservation, the torque of the off-centre application point,
 !> the implicit update at a stiff gap, a particle-scale hand-over where the expansion is negative
-!> (two needle tips), the particle system's step with lubrication switched on, and every pair of a
-!> periodic three-body system lubricated.
+!> (two needle tips), the particle system's step with lubrication switched on, every pair of a
+!> periodic three-body system lubricated, and the tangential and rotational modes (model%tangential)
+!> against Jeffrey & Onishi's (1984) near-contact coefficients of two equal spheres.
 program test_lubrication
   use agglo_kinds, only: wp
   use physical_constants, only: pi
@@ -17,7 +18,8 @@ program test_lubrication
   use quaternion, only: quaternion_normalise, rotate_to_lab
   use closest_points, only: closest_points_t, find_closest_points
   use lubrication, only: lubrication_model_t, lubrication_geometry_t, lubrication_result_t, lubrication_geometry, &
-                         lubrication_resistance, lubrication_subgrid_resistance, lubricate
+                         lubrication_resistance, lubrication_subgrid_resistance, lubrication_tangential_resistances, &
+                         lubricate
   use particle_system, only: particle_models_t, particle_system_t, particle_system_create, particle_system_interact, &
                              particle_system_step, particle_interaction_gap
   use squeeze_case, only: brenner_squeeze_coefficient
@@ -175,6 +177,7 @@ program test_lubrication
 
   call system_with_lubrication()
   call ring_with_lubrication()
+  call tangential_modes()
   call test_finish()
 
 contains
@@ -195,6 +198,67 @@ contains
     xc = 0.5_wp * (contact%point1 + contact%point2)
     normal_velocity = dot_product(point_velocity(body1, xc) - point_velocity(body2, xc), contact%normal)
   end function normal_velocity
+
+  !> The tangential modes for two equal spheres (radius a, 10 nm apart along x, h_out = 20 um): the
+  !> log(1/xi) coefficients of Jeffrey & Onishi (1984, J. Fluid Mech. 139, 261; as tabulated by Kim &
+  !> Karrila 1991, ch. 11) at lambda = 1, with L = ln(h_out / h) the sub-grid part of ln(1/xi):
+  !> Y^A_11 = 1/6 (force 6 pi mu a Y^A L v on a sphere translating past the other), Y^B_11 = 1/4
+  !> (force 4 pi mu a^2 Y^B L omega on a spinning sphere), Y^C_11 = 1/5 and Y^C_12 = 1/20 (torques
+  !> 8 pi mu a^3 Y^C L omega on the spinning sphere and on its neighbour); then a pair moving and
+  !> spinning at random conserves momentum and angular momentum and loses kinetic energy.
+  subroutine tangential_modes()
+    type(lubrication_model_t) :: shear_model
+    real(wp) :: a, h, log_sub, omega, resistances(2), p0(3), l0(3), e0
+    a = a1
+    h = 10.0e-9_wp
+    omega = 20.0_wp
+    shear_model = lubrication_model_t(dynamic_viscosity=mu, outer_gap=20.0e-6_wp, roughness=1.0e-9_wp, tangential=.true.)
+    log_sub = log(20.0e-6_wp / h)
+    call place(sphere1, [0.0_wp, 0.0_wp, 0.0_wp], identity, sphere1, [2.0_wp * a + h, 0.0_wp, 0.0_wp], identity)
+    geometry = lubrication_geometry(sphere1, body1, sphere1, body2, contact)
+    resistances = lubrication_tangential_resistances(shear_model, geometry, h)
+    call check_close(resistances(1), 6.0_wp * pi * mu * a * log_sub / 6.0_wp, 1.0e-9_wp, 'tangential_shear_resistance')
+    call check_close(resistances(2), 0.6_wp * pi * mu * a**3 * log_sub, 1.0e-9_wp, 'tangential_rotation_resistance')
+    call check(all(lubrication_tangential_resistances(shear_model, geometry, 20.0e-6_wp) == 0.0_wp), &
+               'tangential_nothing_at_h_out')
+    ! Translation past the other sphere (Y^A_11): force on body 2 along the motion, no torque but the lever's.
+    call rigid_body_of_spheroid(body1, sphere1, [0.0_wp, 0.0_wp, 0.0_wp], identity, [0.0_wp, 1.0e-3_wp, 0.0_wp])
+    call lubricate(shear_model, sphere1, body1, sphere1, body2, contact, 1.0e-9_wp, result)
+    call check_close(result%force(2), 6.0_wp * pi * mu * a * (1.0_wp / 6.0_wp) * log_sub * 1.0e-3_wp, 1.0e-3_wp, &
+                     'jeffrey_onishi_YA11_force')
+    ! Spin of body 1 about z (Y^B_11, Y^C_11).
+    call rigid_body_of_spheroid(body1, sphere1, [0.0_wp, 0.0_wp, 0.0_wp], identity, [0.0_wp, 0.0_wp, 0.0_wp], &
+                                [0.0_wp, 0.0_wp, omega])
+    call rigid_body_of_spheroid(body2, sphere1, [2.0_wp * a + h, 0.0_wp, 0.0_wp], identity)
+    call lubricate(shear_model, sphere1, body1, sphere1, body2, contact, 1.0e-9_wp, result)
+    call check_close(result%force(2), 4.0_wp * pi * mu * a**2 * 0.25_wp * log_sub * omega, 1.0e-3_wp, &
+                     'jeffrey_onishi_YB11_force')
+    call check_close(result%torque1(3), -8.0_wp * pi * mu * a**3 * 0.2_wp * log_sub * omega, 1.0e-3_wp, &
+                     'jeffrey_onishi_YC11_torque')
+    ! Spin of body 2 about z: the torque on body 1 (Y^C_12).
+    call rigid_body_of_spheroid(body1, sphere1, [0.0_wp, 0.0_wp, 0.0_wp], identity)
+    call rigid_body_of_spheroid(body2, sphere1, [2.0_wp * a + h, 0.0_wp, 0.0_wp], identity, [0.0_wp, 0.0_wp, 0.0_wp], &
+                                [0.0_wp, 0.0_wp, omega])
+    call lubricate(shear_model, sphere1, body1, sphere1, body2, contact, 1.0e-9_wp, result)
+    call check_close(result%torque1(3), -8.0_wp * pi * mu * a**3 * 0.05_wp * log_sub * omega, 1.0e-3_wp, &
+                     'jeffrey_onishi_YC12_torque')
+    ! Random motion and spin: momentum and angular momentum conserved, kinetic energy not increased,
+    ! and the step stays damping at a stiff time step (R_r dt / I >> 1).
+    call rigid_body_of_spheroid(body1, sphere1, [0.0_wp, 0.0_wp, 0.0_wp], identity, [1.0e-3_wp, -2.0e-3_wp, 5.0e-4_wp], &
+                                [12.0_wp, -30.0_wp, 7.0_wp])
+    call rigid_body_of_spheroid(body2, sphere1, [2.0_wp * a + h, 0.0_wp, 0.0_wp], identity, &
+                                [-5.0e-4_wp, 1.0e-3_wp, 2.0e-3_wp], [-3.0_wp, 25.0_wp, -40.0_wp])
+    p0 = linear_momentum(body1) + linear_momentum(body2)
+    l0 = angular_momentum(body1) + angular_momentum(body2)
+    e0 = kinetic_energy(body1) + kinetic_energy(body2)
+    call lubricate(shear_model, sphere1, body1, sphere1, body2, contact, 1.0e-2_wp, result)
+    call check_below(norm2(linear_momentum(body1) + linear_momentum(body2) - p0), 1.0e-13_wp * norm2(p0), &
+                     'tangential_linear_momentum_conserved')
+    call check_below(norm2(angular_momentum(body1) + angular_momentum(body2) - l0), 1.0e-12_wp * norm2(l0), &
+                     'tangential_angular_momentum_conserved')
+    call check(kinetic_energy(body1) + kinetic_energy(body2) < e0, 'tangential_energy_decreased')
+    call check(result%shear_resistance * 1.0e-2_wp / body1%mass > 1.0_wp, 'tangential_stiff_step_case')
+  end subroutine tangential_modes
 
   !> Two equal spheres approaching in the particle system: with lubrication the approach slows
   !> (a step's loss of v_n is the impulse over the reduced mass), without it nothing changes.
