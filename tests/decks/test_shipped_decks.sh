@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# checks: 54
+# checks: 56
 # Every shipped deck (input/*.nml) is accepted by the deck checks as it is (agglo --print-deck reads
 # and checks it like a run, then prints the merged deck), and none sets &run overwrite = .true.: a
 # copied deck must never replace an earlier run (README, docs/decks.md &run overwrite).
