@@ -60,6 +60,8 @@ for value in "$resolved_runs" "$point_runs"; do
 done
 read -r -a shape_list <<< "$shapes"
 no_snapshots=(); (( snapshots )) || no_snapshots=(--set output.field_interval=0.0)
+# The published tables of this study are the paper's omission of the squeeze film (the decks model it).
+no_snapshots+=(--set collision.lubrication=.false.)
 
 for rung in resolved point; do
   runs=$resolved_runs; [ "$rung" = point ] && runs=$point_runs

@@ -102,7 +102,8 @@ for rung in "${rung_list[@]}"; do
 done
 
 # The --set values every batch shares: end time, grid and its converged field, no snapshots.
-common=()
+# The published tables of this study are the paper's omission of the squeeze film (the decks model it).
+common=(--set collision.lubrication=.false.)
 (( snapshots )) || common+=(--set output.field_interval=0.0)
 [ -n "$end_time" ] && common+=(--set "run.end_time=$end_time")
 (( regrid )) && [ -z "$grid" ] && study_die "--regrid-field needs --grid N"

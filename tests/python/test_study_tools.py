@@ -397,6 +397,30 @@ def test_study_scripts_list_their_batches():
                                             for rung, runs in (("point", "20"), ("resolved", "8"))
                                             for shape in ("needle", "disk") for model in ("omission", "lubrication")]
     assert all(("collision.lubrication=.true." in line) == line[0].endswith("lubrication") for line in lines)
+    assert all(("collision.lubrication=.false." in line) == line[0].endswith("omission") for line in lines)
+    # The variants of the lubricated batch: one more batch per shape and variant, the model on.
+    result = run_tool([REPO / "tools" / "near-contact-study.sh", "--list", "--rungs", "point", "--point-runs", "20",
+                       "--shapes", "disk", "--roughness", "1e-10 1e-8", "--tangential", "--noise",
+                       "--variant-runs", "10"], cwd=REPO)
+    assert result.returncode == 0, result.stderr
+    lines = [line.split() for line in result.stdout.splitlines() if not line.startswith("forced")]
+    assert [line[:2] for line in lines] == [["disk-point-omission", "20"], ["disk-point-lubrication", "20"],
+                                            ["disk-point-lubrication-roughness1e-10", "10"],
+                                            ["disk-point-lubrication-roughness1e-8", "10"],
+                                            ["disk-point-lubrication-tangential", "10"],
+                                            ["disk-point-lubrication-noise", "10"]]
+    assert all("collision.lubrication=.true." in line for line in lines[1:])
+    assert "collision.lubrication_roughness=1e-10" in lines[2]
+    assert "collision.lubrication_tangential=.true." in lines[4] and "pair.gap=2.000000000002e-6" in lines[5]
+    result = run_tool([REPO / "tools" / "near-contact-study.sh", "--list", "--roughness", "1nm"], cwd=REPO)
+    assert result.returncode == 2 and "'1nm' is not a gap in m" in result.stderr
+    # The speed-accuracy knobs omit the squeeze film (the published tables), or model it with --lubrication.
+    for flag, value in (([], ".false."), (["--lubrication"], ".true.")):
+        result = run_tool([REPO / "tools" / "speed-accuracy-study.sh", "--list", "--shapes", "disk", "--knobs",
+                           "grid fidelity", "--no-reuse", "--no-tables"] + flag, cwd=REPO)
+        assert result.returncode == 0, result.stderr
+        lines = [line for line in result.stdout.splitlines() if line.startswith("disk-")]
+        assert len(lines) >= 6 and all(f"collision.lubrication={value}" in line for line in lines)
     result = run_tool([REPO / "tools" / "speed-accuracy-study.sh", "--list", "--shapes", "disk",
                        "--knobs", "diffusion substep"], cwd=REPO)
     assert result.returncode == 0, result.stderr
@@ -495,7 +519,8 @@ def test_study_skips_tabled_batches_only_on_the_same_field(spaced_tmp, agglo):
     tables.mkdir()
     from study_compare import RUN_TABLE_COLUMNS
     (tables / "disk-base.csv").write_text(",".join(RUN_TABLE_COLUMNS) + "\n" + "run_0001,1001\nrun_0002,1002\n")
-    deck = run_tool([agglo, "input/chaotic_disk_resolved.nml", "--set", "output.field_interval=0.0", "--print-deck"],
+    deck = run_tool([agglo, "input/chaotic_disk_resolved.nml", "--set", "output.field_interval=0.0", "--set",
+                     "collision.lubrication=.false.", "--print-deck"],
                     cwd=REPO)
     assert deck.returncode == 0, deck.stderr
     (tables / "disk-base.nml").write_text(deck.stdout)

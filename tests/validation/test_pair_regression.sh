@@ -24,7 +24,8 @@ export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_
 PY=/usr/bin/python3; [ -x "$PY" ] || PY=python3
 
 # run NAME DECK SEED END_RULE [SPEED MIRROR PAIR_LINE]: the shipped deck input/DECK.nml with another
-# seed and end rule (and optionally relative speed, mirror_first_collision and one more &pair line),
+# seed and end rule and without the squeeze film (&collision lubrication = .false., as recorded)
+# (and optionally relative speed, mirror_first_collision and one more &pair line),
 # run in $work/NAME.
 run() {
   local name=$1 deck=$2 seed=$3 rule=$4 speed=${5:-} mirror=${6:-} extra=${7:-}
@@ -40,6 +41,8 @@ if speed:
 if mirror:
     text = re.sub(r'(?m)^(\s*)mirror_first_collision\s*=.*$', r'\g<1>mirror_first_collision = ' + mirror, text)
 text = re.sub(r'(?m)^&pair\s*$', "&pair\n  end_rule = '" + rule + "'" + ("\n  " + extra if extra else ""), text)
+# The references are the paper's omission of the squeeze film (the 'stokes' decks now model it).
+text = re.sub(r'(?m)^(\s*)lubrication\s*=.*$', r'\g<1>lubrication = .false.', text)
 open(target, 'w').write(text)
 EOF
   (cd "$work/$name" && mpirun -np 1 "$AGGLO" deck.nml < /dev/null > run.out 2>&1) \
