@@ -45,7 +45,7 @@
 !>   T_2 = +R_r(h) (omega1 - omega2)_t = -T_1,       R_r = (3/5) pi mu a_r^3 L(h),
 !> with g_YA = (4/15) l (2 + l + 2 l^2) / (1 + l)^3 (1/6 for equal spheres), L the sub-grid part of
 !> ln(1/xi) (hand-over and roughness as for R_sub), a_r = 2 a1 a2 / (a1 + a2). For equal spheres
-!> they reproduce Y^A_11 = Y^A_12 magnitude 1/6, Y^B_11 = 1/4, Y^C_11 = 1/5 and Y^C_12 = 1/20
+!> they reproduce Y^A_11 = -Y^A_12 = 1/6, Y^B_11 = 1/4, Y^C_11 = 1/5 and Y^C_12 = 1/20
 !> (Jeffrey & Onishi's normalisations) exactly; R_s is exact for the relative translation of
 !> unequal spheres, the rotation couplings of unequal radii (and of spheroids, through their mean
 !> radii of curvature) are approximated by the equal-sphere form. Each is applied as an implicit
