@@ -108,20 +108,24 @@ for rung in "${rung_list[@]}"; do
   done
 done
 
+# shape_statistics SUFFIX NAME: tools/agglo-stats over the batches <shape>-SUFFIX that have runs, every
+# shape, into OUT/stats-NAME (and its table into OUT/stats-NAME.txt).
+shape_statistics() {
+  local suffix=$1 name=$2 shape roots=()
+  for shape in "${shape_list[@]}"; do
+    study_has_runs "$shape-$suffix" && roots+=("$study_out/$shape-$suffix")
+  done
+  [ ${#roots[@]} -gt 0 ] || return 0
+  echo "== statistics -> $study_out/stats-$name"
+  "$study_tools/agglo-stats" -o "$study_out/stats-$name" "${roots[@]}" | tee "$study_out/stats-$name.txt" \
+    || study_status_all=1
+}
+
 if [ "$study_mode" = run ] && (( study_analysis )); then
   rm -f "$study_out/comparison.csv" "$study_out/comparison.txt" "$study_out/comparison-variants.csv" \
     "$study_out/comparison-variants.txt"
   for rung in "${rung_list[@]}"; do
-    for model in omission lubrication; do
-      roots=()
-      for shape in "${shape_list[@]}"; do
-        study_has_runs "$shape-$rung-$model" && roots+=("$study_out/$shape-$rung-$model")
-      done
-      [ ${#roots[@]} -gt 0 ] || continue
-      echo "== statistics -> $study_out/stats-$rung-$model"
-      "$study_tools/agglo-stats" -o "$study_out/stats-$rung-$model" "${roots[@]}" \
-        | tee "$study_out/stats-$rung-$model.txt" || study_status_all=1
-    done
+    for model in omission lubrication; do shape_statistics "$rung-$model" "$rung-$model"; done
     for shape in "${shape_list[@]}"; do
       study_has_runs "$shape-$rung-omission" && study_has_runs "$shape-$rung-lubrication" || continue
       "$study_python" "$study_tools/compare_outcomes.py" "$study_out/$shape-$rung-omission" \
@@ -132,14 +136,7 @@ if [ "$study_mode" = run ] && (( study_analysis )); then
         | tee -a "$study_out/comparison.txt" || study_status_all=1
     done
     for variant in "${variant_names[@]}"; do
-      roots=()
-      for shape in "${shape_list[@]}"; do
-        study_has_runs "$shape-$rung-lubrication-$variant" && roots+=("$study_out/$shape-$rung-lubrication-$variant")
-      done
-      [ ${#roots[@]} -gt 0 ] || continue
-      echo "== statistics -> $study_out/stats-$rung-$variant"
-      "$study_tools/agglo-stats" -o "$study_out/stats-$rung-$variant" "${roots[@]}" \
-        | tee "$study_out/stats-$rung-$variant.txt" || study_status_all=1
+      shape_statistics "$rung-lubrication-$variant" "$rung-$variant"
       for shape in "${shape_list[@]}"; do
         study_has_runs "$shape-$rung-lubrication" && study_has_runs "$shape-$rung-lubrication-$variant" || continue
         "$study_python" "$study_tools/compare_outcomes.py" "$study_out/$shape-$rung-lubrication" \
