@@ -405,9 +405,17 @@ while (( next < total || ${#running_run[@]} > 0 )); do
   (( ${#running_run[@]} == 0 )) && continue
   stop_if_interrupted
   finished_pid=''
-  wait -n -p finished_pid "${!running_run[@]}"; status=$?
+  wait -n -p finished_pid "${!running_run[@]}" 2>/dev/null; status=$?
   stop_if_interrupted
-  [[ -n $finished_pid ]] || continue
+  if [[ -z ${finished_pid:-} ]]; then
+    # wait -n names no run if bash reaped one before it was asked (a run that ended at once) and
+    # dropped it from its job table: collect such a run by its pid (bash keeps its status), else
+    # pause before waiting again rather than spin.
+    for pid in "${!running_run[@]}"; do
+      if ! kill -0 "$pid" 2>/dev/null; then wait "$pid"; status=$?; finished_pid=$pid; break; fi
+    done
+    [[ -n ${finished_pid:-} ]] || { sleep 0.2; continue; }
+  fi
   i=${running_run[$finished_pid]}; unset "running_run[$finished_pid]"
   dir="$root/$(run_name "$i")"
   run_ms=$(($(now_ms) - start_time[$i])); busy_ms=$((busy_ms + run_ms))
