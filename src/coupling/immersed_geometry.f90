@@ -23,8 +23,13 @@
 !>   The margin, 1e-9 (max(a, b)/min(a, b))^2, exceeds the round-off of either evaluation (at most
 !>   some tens of ulps of the terms, each below 9 (max/min)^2 in the bounding box) by orders of
 !>   magnitude, so both give the same sign wherever the cheap one is trusted;
-!> - the ghost and interior lists are gathered plane by plane and row by row over the bounding boxes
-!>   of the bodies that reach the row (in storage order, as a sweep of the whole slab would);
+!>   The nodes within the margin lie between the roots of q(s) = margin: each row visits only the
+!>   box's nodes there (one more each side for the roots' round-off), and records them as the row's
+!>   candidate run for that body. The runs hold every node a body can own, so the ghost test, the
+!>   lists and the reset of the work arrays visit the runs alone: the work per body goes with its
+!>   rows times its chords, not with its bounding box;
+!> - the ghost and interior lists are gathered plane by plane and row by row from the rows' runs
+!>   (the union of a row's runs in ascending index: storage order, as a sweep of the whole slab would);
 !> - the fallback test of a ghost tries only the bodies whose bounding sphere lies within reach of
 !>   its own: |c_m - c_n| <= R_n + R_m + (1 + max(1, image_cells)) h_max (R = max(a, b)); any other
 !>   body is rejected by the segment test's own bounding-sphere check, since |B - c_n| <= R_n and
@@ -63,8 +68,19 @@ module immersed_geometry
     integer, allocatable :: owner(:, :, :)              !< (nx, ny, k_first:) body containing the node, else 0
     integer(int8), allocatable :: status(:, :, :)       !< (nx, ny, k_first + 1:) node_fluid/ghost/interior
     integer, allocatable :: ghost_index(:, :, :)        !< (nx, ny, nz_local) index in the ghost list, else 0
-    !> the index sets each body's bounding box marked in owner, (nx | ny | planes, n_bodies)
-    logical, allocatable :: marked_x(:, :), marked_y(:, :), marked_z(:, :)
+    !> the x and y index sets of each body's bounding box, (nx | ny, n_bodies)
+    logical, allocatable :: marked_x(:, :), marked_y(:, :)
+    !> walk_x(1:walk_length(n), n): the x indices of body n's box in increasing separation from its
+    !> centre (a periodic run of less than half the box)
+    integer, allocatable :: walk_x(:, :), walk_length(:)
+    !> the candidate runs: along row (run_j, run_k) the positions run_first..run_last of
+    !> run_body's walk, the only nodes of the row that can lie in that body; together they hold
+    !> every node owner marks, so the later passes visit them alone
+    integer :: n_runs = 0
+    integer, allocatable :: run_body(:), run_j(:), run_k(:), run_first(:), run_last(:)
+    !> the runs of each local row (ny, nz_local): row_head(j, k) the last one added, run_next(r)
+    !> the one added before r (0: none)
+    integer, allocatable :: row_head(:, :), run_next(:)
   end type classification_work_t
 
   !> The immersed-boundary geometry of all bodies on this rank.
@@ -158,11 +174,10 @@ contains
     integer, intent(in) :: component
     type(classification_work_t), intent(inout) :: work
     type(component_nodes_t), intent(inout) :: nodes
-    integer, allocatable :: list_x(:), list_y(:), list_z(:), box_x(:), box_y(:)
+    integer, allocatable :: list_x(:), list_y(:), list_z(:)
     logical, allocatable :: near_x(:), near_y(:), near_z(:)
-    integer :: reach, k_lo, k_hi, i, j, k, ii, jj, kk, n_ghost, n_interior, g, n, m, n_plane, n_row
-    integer :: box_size_x(size(bodies)), box_list_x(grid%nx, size(bodies))
-    integer :: plane_bodies(size(bodies)), row_bodies(size(bodies)), i_below(grid%nx), i_above(grid%nx)
+    integer :: reach, k_lo, k_hi, i, j, k, ii, jj, kk, n_ghost, n_interior, g, n, n_row, r, p
+    integer :: row_indices(grid%nx), i_below(grid%nx), i_above(grid%nx)
     integer :: j_below(grid%ny), j_above(grid%ny)
     integer, allocatable :: candidates(:, :), n_candidates(:)
     real(wp) :: h_max, h_min, image_cells
@@ -196,29 +211,23 @@ contains
       ! each visited once, in its owner's box. The counts are of this rank's planes.
       n_ghost = 0
       n_interior = 0
-      do n = 1, size(bodies)
-        box_x = pack([(i, i = 1, grid%nx)], work%marked_x(:, n))
-        box_y = pack([(j, j = 1, grid%ny)], work%marked_y(:, n))
-        box_size_x(n) = size(box_x)
-        box_list_x(1:size(box_x), n) = box_x
-        do k = k_lo, k_hi
-          if (.not. work%marked_z(k, n)) cycle
-          do jj = 1, size(box_y)
-            j = box_y(jj)
-            do ii = 1, size(box_x)
-              i = box_x(ii)
-              if (owner(i, j, k) /= n) cycle
-              if (owner(i_below(i), j, k) == 0 .or. owner(i_above(i), j, k) == 0 .or. &
-                  owner(i, j_below(j), k) == 0 .or. owner(i, j_above(j), k) == 0 .or. &
-                  owner(i, j, k - 1) == 0 .or. owner(i, j, k + 1) == 0) then
-                status(i, j, k) = node_ghost
-                if (k >= 1 .and. k <= grid%nz_local) n_ghost = n_ghost + 1
-              else
-                status(i, j, k) = node_interior
-                if (k >= 1 .and. k <= grid%nz_local) n_interior = n_interior + 1
-              end if
-            end do
-          end do
+      do r = 1, work%n_runs
+        n = work%run_body(r)
+        j = work%run_j(r)
+        k = work%run_k(r)
+        if (k < k_lo .or. k > k_hi) cycle
+        do p = work%run_first(r), work%run_last(r)
+          i = work%walk_x(p, n)
+          if (owner(i, j, k) /= n) cycle
+          if (owner(i_below(i), j, k) == 0 .or. owner(i_above(i), j, k) == 0 .or. &
+              owner(i, j_below(j), k) == 0 .or. owner(i, j_above(j), k) == 0 .or. &
+              owner(i, j, k - 1) == 0 .or. owner(i, j, k + 1) == 0) then
+            status(i, j, k) = node_ghost
+            if (k >= 1 .and. k <= grid%nz_local) n_ghost = n_ghost + 1
+          else
+            status(i, j, k) = node_interior
+            if (k >= 1 .and. k <= grid%nz_local) n_interior = n_interior + 1
+          end if
         end do
       end do
 
@@ -241,34 +250,23 @@ contains
       nodes%n_ghost = 0
       nodes%n_interior = 0
       if (options%band) then
-        ! Plane by plane, row by row: only the rows some body's box reaches, and in a row the
-        ! indices of those boxes (ascending: the order of the sweep below).
+        ! Plane by plane, row by row: only the rows with candidate runs, and in a row the indices
+        ! of its runs, ascending and each once (the order of the sweep below).
         do k = 1, grid%nz_local
           if (.not. near_z(k)) cycle
-          n_plane = 0
-          do n = 1, size(bodies)
-            if (.not. work%marked_z(k, n)) cycle
-            n_plane = n_plane + 1
-            plane_bodies(n_plane) = n
-          end do
           do j = 1, grid%ny
-            if (.not. near_y(j)) cycle
+            if (work%row_head(j, k) == 0) cycle
             n_row = 0
-            do m = 1, n_plane
-              if (.not. work%marked_y(j, plane_bodies(m))) cycle
-              n_row = n_row + 1
-              row_bodies(n_row) = plane_bodies(m)
+            r = work%row_head(j, k)
+            do while (r /= 0)
+              do p = work%run_first(r), work%run_last(r)
+                call insert_index(work%walk_x(p, work%run_body(r)), row_indices, n_row)
+              end do
+              r = work%run_next(r)
             end do
-            if (n_row == 1) then
-              n = row_bodies(1)
-              do ii = 1, box_size_x(n)
-                call list_node(box_list_x(ii, n), j, k)
-              end do
-            else if (n_row > 1) then
-              do i = 1, grid%nx
-                if (any(work%marked_x(i, row_bodies(1:n_row)))) call list_node(i, j, k)
-              end do
-            end if
+            do ii = 1, n_row
+              call list_node(row_indices(ii), j, k)
+            end do
           end do
         end do
       else
@@ -308,7 +306,7 @@ contains
         work%ghost_index(nodes%ghost(g)%node(1), nodes%ghost(g)%node(2), nodes%ghost(g)%node(3)) = 0
       end do
     end associate
-    call clear_marked(work, size(bodies))
+    call clear_runs(work)
   contains
 
     !> Node (i, j, k) into the ghost or interior list by its status.
@@ -327,6 +325,25 @@ contains
       end select
     end subroutine list_node
   end subroutine classify_component
+
+  !> Insert index i into the ascending list(1:count) unless it is there already. The runs of a row
+  !> come nearly in order and are short (a body's chord in cells), so the search from the end is short.
+  pure subroutine insert_index(i, list, count)
+    integer, intent(in) :: i
+    integer, intent(inout) :: list(:), count
+    integer :: position
+    position = count
+    do while (position > 0)
+      if (list(position) <= i) exit
+      position = position - 1
+    end do
+    if (position > 0) then
+      if (list(position) == i) return
+    end if
+    list(position + 2:count + 1) = list(position + 1:count)
+    list(position + 1) = i
+    count = count + 1
+  end subroutine insert_index
 
   !> For each body n, the other bodies its ghosts' fallback test must try (candidates(1:count(n), n),
   !> ascending): with options%band only those whose bounding sphere can meet an image segment from
@@ -369,40 +386,47 @@ contains
     if (fits) fits = size(work%owner, 1) == grid%nx .and. size(work%owner, 2) == grid%ny .and. &
                      lbound(work%owner, 3) == k_first .and. ubound(work%owner, 3) == k_last
     if (.not. fits) then
-      if (allocated(work%owner)) deallocate(work%owner, work%status, work%ghost_index)
+      if (allocated(work%owner)) deallocate(work%owner, work%status, work%ghost_index, work%row_head)
       allocate(work%owner(grid%nx, grid%ny, k_first:k_last), work%status(grid%nx, grid%ny, k_first + 1:k_last - 1))
-      allocate(work%ghost_index(grid%nx, grid%ny, grid%nz_local))
+      allocate(work%ghost_index(grid%nx, grid%ny, grid%nz_local), work%row_head(grid%ny, grid%nz_local))
       work%owner = 0
+      work%row_head = 0
       work%status = node_fluid
       work%ghost_index = 0
       work%k_first = k_first
     end if
     if (allocated(work%marked_x)) then
-      if (size(work%marked_x, 2) /= n_bodies .or. .not. fits) deallocate(work%marked_x, work%marked_y, work%marked_z)
+      if (size(work%marked_x, 2) /= n_bodies .or. .not. fits) deallocate(work%marked_x, work%marked_y, &
+                                                                        work%walk_x, work%walk_length)
     end if
     if (.not. allocated(work%marked_x)) allocate(work%marked_x(grid%nx, n_bodies), work%marked_y(grid%ny, n_bodies), &
-                                                 work%marked_z(k_first:k_last, n_bodies))
+                                                 work%walk_x(grid%nx, n_bodies), work%walk_length(n_bodies))
+    if (.not. allocated(work%run_body)) allocate(work%run_body(0), work%run_j(0), work%run_k(0), work%run_first(0), &
+                                                 work%run_last(0), work%run_next(0))
     work%marked_x = .false.
     work%marked_y = .false.
-    work%marked_z = .false.
   end subroutine prepare_work
 
-  !> Zero owner and status in the boxes the bodies marked (restores the work's invariant).
-  subroutine clear_marked(work, n_bodies)
+  !> Zero owner, status and the row lists along the candidate runs, which hold every node the
+  !> classification marked (restores the work's invariant).
+  subroutine clear_runs(work)
     type(classification_work_t), intent(inout) :: work
-    integer, intent(in) :: n_bodies
-    integer, allocatable :: list_x(:), list_y(:)
-    integer :: n, i, j, k
-    do n = 1, n_bodies
-      list_x = pack([(i, i = 1, size(work%owner, 1))], work%marked_x(:, n))
-      list_y = pack([(j, j = 1, size(work%owner, 2))], work%marked_y(:, n))
-      do k = lbound(work%owner, 3), ubound(work%owner, 3)
-        if (.not. work%marked_z(k, n)) cycle
-        work%owner(list_x, list_y, k) = 0
-        if (k >= lbound(work%status, 3) .and. k <= ubound(work%status, 3)) work%status(list_x, list_y, k) = node_fluid
-      end do
+    integer :: r, p, j, k
+    logical :: has_status
+    do r = 1, work%n_runs
+      j = work%run_j(r)
+      k = work%run_k(r)
+      has_status = k >= lbound(work%status, 3) .and. k <= ubound(work%status, 3)
+      associate (walk => work%walk_x(:, work%run_body(r)))
+        do p = work%run_first(r), work%run_last(r)
+          work%owner(walk(p), j, k) = 0
+          if (has_status) work%status(walk(p), j, k) = node_fluid
+        end do
+      end associate
+      if (k >= lbound(work%row_head, 2) .and. k <= ubound(work%row_head, 2)) work%row_head(j, k) = 0
     end do
-  end subroutine clear_marked
+    work%n_runs = 0
+  end subroutine clear_runs
 
   !> The field-layout status (0:nx+1, 0:ny+1, 0:nz_local+1) back to fluid: allocated when its shape
   !> changed; else only where the last classification put solid nodes (its ghost and interior
@@ -481,8 +505,9 @@ contains
   end subroutine set_with_ring
 
   !> work%owner(i, j, k) = index of the body that contains node (i, j, k) (k local, extended), else
-  !> 0 (zero on entry). Only the nodes within each body's lab bounding box are tested; the box's
-  !> index sets go to work%marked_* (for clear_marked) and their union to near_*.
+  !> 0 (zero on entry). Only the nodes within each body's lab bounding box are tested, and with the
+  !> band only those of each row's candidate run (work%run_*, module header); the box's x and y
+  !> index sets go to work%marked_*, and the union of all boxes to near_*.
   subroutine mark_solid_nodes(grid, bodies, options, component, work, near_x, near_y, near_z)
     type(fluid_grid_t), intent(in) :: grid
     type(immersed_body_t), intent(in) :: bodies(:)
@@ -490,16 +515,17 @@ contains
     integer, intent(in) :: component
     type(classification_work_t), intent(inout) :: work
     logical, intent(out) :: near_x(:), near_y(:), near_z(work%k_first:)
-    integer :: n, i, j, k, previous
+    integer :: n, i, j, k, p, previous, p_first, p_last
     real(wp) :: box(3), extent(3), x(3), d(3), d_previous, d_new, rotation(3, 3), form(3, 3), margin, q, row_b, row_c
-    real(wp) :: sep_x(grid%nx), sep_y(grid%ny)
+    real(wp) :: sep_x(grid%nx), sep_y(grid%ny), root, first_sep
     type(surface_projection_t) :: p_new, p_old
 
     box = [grid%lx, grid%ly, grid%lz]
     near_x = .false.
     near_y = .false.
     near_z = .false.
-    associate (owner => work%owner, in_x => work%marked_x, in_y => work%marked_y, in_z => work%marked_z)
+    work%n_runs = 0
+    associate (owner => work%owner, in_x => work%marked_x, in_y => work%marked_y, walk => work%walk_x)
       do n = 1, size(bodies)
         extent = lab_half_extent(bodies(n))
         rotation = rotation_matrix(bodies(n)%orientation)
@@ -514,6 +540,8 @@ contains
           in_x(i, n) = abs(sep_x(i)) <= extent(1)
           near_x(i) = near_x(i) .or. in_x(i, n)
         end do
+        call box_walk(in_x(:, n), walk(:, n), work%walk_length(n))
+        if (work%walk_length(n) > 0) first_sep = sep_x(walk(1, n))
         do j = 1, grid%ny
           x = node_position(grid, component, 1, j, 1)
           sep_y(j) = minimum_image(x(2) - bodies(n)%centre(2), box(2))
@@ -525,7 +553,6 @@ contains
           d(3) = minimum_image(x(3) - bodies(n)%centre(3), box(3))
           if (abs(d(3)) > extent(3)) cycle
           near_z(k) = .true.
-          in_z(k, n) = .true.
           do j = 1, grid%ny
             if (.not. in_y(j, n)) cycle
             d(2) = sep_y(j)
@@ -534,9 +561,19 @@ contains
             row_c = (form(2, 2) * d(2) + 2.0_wp * form(2, 3) * d(3)) * d(2) + form(3, 3) * d(3)**2 - 1.0_wp
             if (options%band) then
               if (row_c - row_b**2 / form(1, 1) > margin) cycle
+              ! q(s) <= margin only between the roots of q(s) = margin: the walk's positions there,
+              ! one more each side for the roots' round-off (q itself decides each node below).
+              root = sqrt(max(0.0_wp, row_b**2 - form(1, 1) * (row_c - margin)))
+              p_first = max(1, floor(((-row_b - root) / form(1, 1) - first_sep) / grid%dx))
+              p_last = min(work%walk_length(n), ceiling(((-row_b + root) / form(1, 1) - first_sep) / grid%dx) + 2)
+            else
+              p_first = 1
+              p_last = work%walk_length(n)
             end if
-            do i = 1, grid%nx
-              if (.not. in_x(i, n)) cycle
+            if (p_first > p_last) cycle
+            call add_run(work, grid, n, j, k, p_first, p_last)
+            do p = p_first, p_last
+              i = walk(p, n)
               d(1) = sep_x(i)
               if (options%band) then
                 q = (form(1, 1) * d(1) + 2.0_wp * row_b) * d(1) + row_c
@@ -570,5 +607,73 @@ contains
       end do
     end associate
   end subroutine mark_solid_nodes
+
+  !> The indices where `inside` holds, a periodic run shorter than the period, from its lower end
+  !> (the one whose periodic predecessor is outside) upwards: in increasing separation from the
+  !> centre of the box they come from.
+  pure subroutine box_walk(inside, walk, length)
+    logical, intent(in) :: inside(:)
+    integer, intent(out) :: walk(:), length
+    integer :: i, start, n
+    n = size(inside)
+    length = 0
+    start = 0
+    do i = 1, n
+      if (inside(i) .and. .not. inside(wrap(i - 1, n))) then
+        start = i
+        exit
+      end if
+    end do
+    if (start == 0) return
+    i = start
+    do while (inside(i) .and. length < n)
+      length = length + 1
+      walk(length) = i
+      i = wrap(i + 1, n)
+    end do
+  end subroutine box_walk
+
+  !> Record the candidate run of body n along row (j, k) (module header of the work type); a run on
+  !> this rank's planes joins its row's list.
+  subroutine add_run(work, grid, n, j, k, first, last)
+    type(classification_work_t), intent(inout) :: work
+    type(fluid_grid_t), intent(in) :: grid
+    integer, intent(in) :: n, j, k, first, last
+    integer :: r
+    if (work%n_runs == size(work%run_body)) call grow_runs(work)
+    r = work%n_runs + 1
+    work%n_runs = r
+    work%run_body(r) = n
+    work%run_j(r) = j
+    work%run_k(r) = k
+    work%run_first(r) = first
+    work%run_last(r) = last
+    work%run_next(r) = 0
+    if (k >= 1 .and. k <= grid%nz_local) then
+      work%run_next(r) = work%row_head(j, k)
+      work%row_head(j, k) = r
+    end if
+  end subroutine add_run
+
+  !> Twice the room for runs, the recorded ones kept.
+  subroutine grow_runs(work)
+    type(classification_work_t), intent(inout) :: work
+    integer :: room
+    room = max(1024, 2 * size(work%run_body))
+    call resize(work%run_body)
+    call resize(work%run_j)
+    call resize(work%run_k)
+    call resize(work%run_first)
+    call resize(work%run_last)
+    call resize(work%run_next)
+  contains
+    subroutine resize(values)
+      integer, allocatable, intent(inout) :: values(:)
+      integer, allocatable :: kept(:)
+      allocate(kept(room))
+      kept(1:work%n_runs) = values(1:work%n_runs)
+      call move_alloc(kept, values)
+    end subroutine resize
+  end subroutine grow_runs
 
 end module immersed_geometry
