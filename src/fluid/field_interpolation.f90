@@ -237,13 +237,16 @@ contains
     real(wp), intent(in) :: field(0:, 0:, 0:)
     integer, intent(in) :: ix(3), iy(3), iz(3)
     real(wp), intent(in) :: wx(3), wy(3), wz(3)
-    integer :: a, b, c
+    integer :: a, b, c, last_x
+    ! An exact zero weight (a value stencil's unused third node) adds nothing: skip its loads.
+    last_x = 3
+    if (wx(3) == 0.0_wp) last_x = 2
     total = 0
     do c = 1, 3
-      if (wz(c) == 0.0_wp) cycle   ! an exact zero weight (unused third node): skip its loads
+      if (wz(c) == 0.0_wp) cycle
       do b = 1, 3
         if (wy(b) == 0.0_wp) cycle
-        do a = 1, 3
+        do a = 1, last_x
           total = total + wx(a) * wy(b) * wz(c) * field(ix(a), iy(b), iz(c))
         end do
       end do
