@@ -47,6 +47,12 @@ def test_suspension_study_lists_its_batches(spaced_tmp):
     for text in ("grid.nx=72", "run.end_time=1e-3", "suspension.count=16",
                  "fluid.init_file='output/hit_box_72/final_field.h5'"):
         assert all(text in line for line in lines), text
+    # The published tables pin the paper's omission of the squeeze film; --lubrication models it.
+    assert all("collision.lubrication=.false." in line for line in lines)
+    result = run_tool([STUDY, "--list", "--lubrication", "--ghost-runs", "0", "--shapes", "disk"], cwd=REPO)
+    assert result.returncode == 0, result.stderr
+    lines = [line for line in result.stdout.splitlines() if not line.startswith("forced")]
+    assert lines and all("collision.lubrication=.true." in line for line in lines)
     for bad in (["--shapes", "cube"], ["--rungs", "stokes"], ["--runs", "0"], ["--end-time", "soon"],
                 ["--grid", "-4"]):
         refused = run_tool([STUDY, "--list", *bad], cwd=REPO)
