@@ -207,8 +207,8 @@ contains
     list_y = pack([(j, j = 1, grid%ny)], near_y)
     list_z = pack([(k, k = k_lo, k_hi)], near_z(k_lo:k_hi))
     associate (owner => work%owner, status => work%status)
-      ! status is node_fluid everywhere on entry (work's invariant); solid nodes only in the boxes,
-      ! each visited once, in its owner's box. The counts are of this rank's planes.
+      ! status is node_fluid everywhere on entry (work's invariant); solid nodes only in the runs,
+      ! each visited once, in its owner's run. The counts are of this rank's planes.
       n_ghost = 0
       n_interior = 0
       do r = 1, work%n_runs
@@ -541,7 +541,8 @@ contains
           near_x(i) = near_x(i) .or. in_x(i, n)
         end do
         call box_walk(in_x(:, n), walk(:, n), work%walk_length(n))
-        if (work%walk_length(n) > 0) first_sep = sep_x(walk(1, n))
+        if (work%walk_length(n) == 0) cycle   ! no node between the box's x planes
+        first_sep = sep_x(walk(1, n))
         do j = 1, grid%ny
           x = node_position(grid, component, 1, j, 1)
           sep_y(j) = minimum_image(x(2) - bodies(n)%centre(2), box(2))
