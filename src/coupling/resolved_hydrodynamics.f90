@@ -75,6 +75,7 @@ module resolved_hydrodynamics
   use physical_constants, only: pi
   use logger, only: log_line
   use text_format, only: real_text, int_text
+  use sample_statistics, only: median
   use checkpoint_files, only: checkpoint_t
   use run_directory, only: run_file
   use hdf5_files, only: h5_exists
@@ -467,17 +468,29 @@ contains
   end function resolved_impulse_inertia
 
   !> The last step's ghost-row sweeps (near contact the two bodies' rows couple and need more) and
-  !> the bodies' force magnitudes, in the progress log.
+  !> the bodies' force magnitudes, in the progress log: each body's up to listed_forces bodies, else
+  !> the largest (with its body) and the median, so that a suspension's line stays readable.
   subroutine resolved_log_progress(self, solver)
     class(resolved_hydrodynamics_t), intent(in) :: self
     type(fluid_solver_t), intent(in) :: solver
+    integer, parameter :: listed_forces = 8
     character(len=:), allocatable :: text
+    real(wp) :: magnitudes(size(self%force, 2))
     integer :: i
     text = '  immersed boundary: sweeps '//int_text(self%scene%predicted%sweeps)//', residual '// &
-           real_text(self%scene%predicted%residual)//', |F| ='
-    do i = 1, size(self%force, 2)
-      text = text//' '//real_text(norm2(self%force(:, i)))
+           real_text(self%scene%predicted%residual)
+    do i = 1, size(magnitudes)
+      magnitudes(i) = norm2(self%force(:, i))
     end do
+    if (size(magnitudes) <= listed_forces) then
+      text = text//', |F| ='
+      do i = 1, size(magnitudes)
+        text = text//' '//real_text(magnitudes(i))
+      end do
+    else
+      text = text//', |F| largest '//real_text(maxval(magnitudes))//' (body '//int_text(maxloc(magnitudes, 1))// &
+             '), median '//real_text(median(magnitudes))
+    end if
     text = text//' N, fallback rows '//int_text(self%fallbacks)//' (saturated '//int_text(self%saturated)// &
            '; most '//int_text(self%most_fallbacks)//', '//int_text(self%most_saturated)//')'
     call log_line(text)
