@@ -224,6 +224,8 @@ validate: deps ## run the immersed-boundary validation ladder (the table in docs
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_free_cn
 	$(MPIRUN) -np 1 $(BUILD)/bench/bench_push_pair stokes
 	for r in '8 24 0.1' '8 48 0.1' '12 36 0.1' '8 48 0.03'; do $(MPIRUN) -np 1 $(BUILD)/bench/bench_push_pair resolved $$r; done
+	for r in 'needle 6 96 24 0.003' 'needle 6 96 24 0.01' 'needle 9 144 36 0.01' 'needle 6 96 48 0.01' \
+	  'disk 6 32 48 10' 'disk 6 32 48 3' 'disk 9 48 72 10'; do $(MPIRUN) -np 1 $(BUILD)/bench/bench_push_pair resolved-tips $$r; done
 	AGGLO=$(abspath $(BUILD))/agglo EXTREMES=long bash tests/mpi/test_resolved_extremes.sh
 	@$(MAKE) --no-print-directory validate-decks
 

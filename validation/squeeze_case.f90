@@ -28,6 +28,11 @@
 !> m_a = rho_f V / 2 (the isolated sphere's added mass; it matters only in the start transient).
 !> The push makes the approach quasi-steady (the gap closes a cell in many viscous times a^2/nu),
 !> so U(h) tends to F / (6 pi mu a beta(h)).
+!> The same free approach runs a needle pair tip to tip or a disk pair face to face (shape,
+!> aspect_ratio; symmetry axes on the line of centres x, r the volume-equivalent radius, F = 6 pi mu
+!> r U_p) in a box of box_cells cells; the history then carries each body's isolated axial Stokes
+!> drag zeta (module stokes_resistance) and the reduced radius R_eff of the closest points (module
+!> lubrication) for the curvature-scaled near-contact reference of module push_pair_case.
 module squeeze_case
   use agglo_kinds, only: wp
   use physical_constants, only: pi
@@ -41,10 +46,12 @@ module squeeze_case
   use immersed_scene, only: prescribed_motion_t, immersed_scene_t, immersed_scene_options_t, immersed_scene_create, immersed_step
   use forcing_driver, only: forcing_driver_t
   use rigid_body, only: rigid_body_t, rigid_body_of_spheroid, integrator_euler
+  use quaternion, only: symmetry_axis
   use particle_system, only: particle_system_t, particle_models_t, particle_loads_t, particle_system_create, &
                              particle_system_interact, particle_system_step, particle_loads_zero, &
                              particle_system_set_added_inertia
   use lubrication, only: lubrication_model_t
+  use stokes_resistance, only: spheroid_resistance_coefficients
   use resolved_hydrodynamics, only: resolved_hydrodynamics_t, resolved_hydrodynamics_create, &
                                     resolved_hydrodynamics_options_t
   implicit none
@@ -82,8 +89,11 @@ module squeeze_case
   end type squeeze_result_t
 
   type :: free_squeeze_case_t
-    real(wp) :: diameter_cells = 8.0_wp          !< D / dx
-    integer :: width_cells = 32                  !< n_y = n_z; n_x = 2 n_y
+    character(len=8) :: shape = 'sphere'         !< 'sphere', 'needle' (tip to tip) or 'disk' (face to face)
+    real(wp) :: aspect_ratio = 1.0_wp            !< needle a/b, disk b/a (module spheroid); unused for a sphere
+    real(wp) :: diameter_cells = 8.0_wp          !< D / dx; needle, disk: the volume-equivalent 2 r / dx
+    integer :: width_cells = 32                  !< n_y = n_z; n_x = 2 n_y (when box_cells is unset)
+    integer :: box_cells(3) = 0                  !< n_x, n_y, n_z; all 0: 2 width_cells, width_cells, width_cells
     real(wp) :: start_gap_cells = 5.0_wp         !< h / dx at the start (both spheres at rest)
     real(wp) :: stop_gap_cells = 0.05_wp         !< the run ends when the gap falls below this
     real(wp) :: push_reynolds = 0.1_wp           !< U_p a / nu (F = 6 pi mu a U_p)
@@ -108,10 +118,14 @@ module squeeze_case
     real(wp), allocatable :: resolved(:)      !< N, (F_2x - F_1x) / 2 of the immersed boundary, > 0 resisting
     real(wp), allocatable :: lubrication(:)   !< N, the same of the sub-grid lubrication, mean over the sub-steps
     real(wp) :: push = 0                      !< N, F
-    real(wp) :: radius = 0                    !< m, a
+    real(wp) :: radius = 0                    !< m, a (needle, disk: the volume-equivalent r)
     real(wp) :: cell = 0                      !< m, dx
     real(wp) :: mass = 0                      !< kg, m
-    real(wp) :: added_mass = 0                !< kg, rho_f V / 2
+    real(wp) :: added_mass = 0                !< kg, rho_f V / 2 (a sphere's)
+    real(wp) :: axial_drag = 0                !< N s/m, zeta: one isolated body's Stokes drag along x
+    real(wp) :: reduced_radius = 0            !< m, R_eff of the closest points (the last step the model acted)
+    real(wp) :: lateral_offset = 0            !< m, distance of the two centres across x at the end
+    real(wp) :: tilt = 0                      !< rad, the larger angle of a symmetry axis to x at the end
     integer :: steps = 0
     integer :: max_sweeps_seen = 0            !< most ghost-row sweeps of one imposition
     logical :: reached = .false.              !< the gap fell below stop_gap_cells
@@ -268,22 +282,37 @@ contains
     type(particle_loads_t) :: loads
     type(ibm_settings_t) :: settings
     type(resolved_hydrodynamics_t) :: provider
-    real(wp) :: h, radius, gap, width, dt, t0, centre(3), lubrication_sum, lengths(3)
+    real(wp) :: h, radius, gap, dt, t0, centre(3), lubrication_sum, lengths(3), coefficients(4), axis(3)
     real(wp), allocatable :: rows(:, :)
-    integer :: step, substep, n
+    integer :: step, substep, n, cells(3)
+    character(len=64) :: text
 
     t0 = wall_time()
-    call squeeze_fluid([2 * case%width_cells, case%width_cells, case%width_cells], solver, lengths, &
-                       case%pressure_scheme)
-    width = lengths(2)
+    select case (trim(case%shape))
+    case ('sphere', 'needle', 'disk')
+    case default
+      call fatal('free squeeze: shape '''//trim(case%shape)//''' is not allowed; allowed: sphere, needle, disk')
+    end select
+    cells = case%box_cells
+    if (all(cells == 0)) cells = [2 * case%width_cells, case%width_cells, case%width_cells]
+    if (any(cells < 1)) then
+      write(text, '(3(1x,i0))') cells
+      call fatal('free squeeze: box_cells ='//trim(text)//'; each must be >= 1 (or all 0 for the width_cells box)')
+    end if
+    call squeeze_fluid(cells, solver, lengths, case%pressure_scheme)
 
     h = solver%grid%dx
     radius = 0.5_wp * case%diameter_cells * h
     gap = case%start_gap_cells * h
-    centre = [0.5_wp * box, 0.5_wp * width, 0.5_wp * width] + case%offset_cells * h
+    centre = [0.5_wp * box, 0.5_wp * lengths(2), 0.5_wp * lengths(3)] + case%offset_cells * h
     do n = 1, 2
-      shapes(n) = make_spheroid('sphere', radius, case%density_ratio * density)
-      call rigid_body_of_spheroid(bodies(n), shapes(n), centre + [(2 * n - 3) * (radius + 0.5_wp * gap), 0.0_wp, 0.0_wp], &
+      if (case%shape == 'sphere') then
+        shapes(n) = make_spheroid('sphere', radius, case%density_ratio * density)
+      else
+        shapes(n) = make_spheroid(trim(case%shape), radius, case%density_ratio * density, case%aspect_ratio)
+      end if
+      ! The symmetry axis (semi-axis a) along x: the closest points are the tips or face centres.
+      call rigid_body_of_spheroid(bodies(n), shapes(n), centre + [(2 * n - 3) * (shapes(n)%a + 0.5_wp * gap), 0.0_wp, 0.0_wp], &
                                   [1.0_wp, 0.0_wp, 0.0_wp, 0.0_wp], [0.0_wp, 0.0_wp, 0.0_wp], [0.0_wp, 0.0_wp, 0.0_wp])
     end do
     models%integrator = integrator_euler
@@ -291,7 +320,7 @@ contains
     ! The roughness far below every gap of the run: the model's force is not saturated.
     models%lubrication_model = lubrication_model_t(dynamic_viscosity=density * viscosity, &
                                                    outer_gap=case%handover_cells * h, roughness=1.0e-6_wp * h)
-    call particle_system_create(system, shapes, bodies, models, [box, width, width])
+    call particle_system_create(system, shapes, bodies, models, [box, lengths(2), lengths(3)])
     dt = case%viscous_number * h**2 / viscosity
     call particle_system_interact(system, dt / case%substeps)
 
@@ -320,6 +349,7 @@ contains
         call particle_system_step(system, dt / case%substeps, loads)
         lubrication_sum = lubrication_sum + 0.5_wp * (system%lubrication_loads%force(1, 2) &
                                                       - system%lubrication_loads%force(1, 1))
+        if (system%pairs(1)%lubrication%active) history%reduced_radius = system%pairs(1)%lubrication%geometry%reduced_radius
       end do
       if (.not. system%pairs(1)%active) call fatal('free squeeze: the pair''s closest points are not current')
       rows(1, step) = solver%time
@@ -341,6 +371,13 @@ contains
     history%cell = h
     history%mass = system%bodies(1)%mass
     history%added_mass = 0.5_wp * density * shapes(1)%volume
+    coefficients = spheroid_resistance_coefficients(shapes(1)%a, shapes(1)%b)
+    history%axial_drag = 6.0_wp * pi * density * viscosity * radius * coefficients(1)
+    history%lateral_offset = norm2(system%bodies(2)%position(2:3) - system%bodies(1)%position(2:3))
+    do n = 1, 2
+      axis = symmetry_axis(system%bodies(n)%quaternion)
+      history%tilt = max(history%tilt, acos(min(1.0_wp, abs(axis(1)))))
+    end do
     history%wall_seconds = wall_time() - t0
   end subroutine run_free_squeeze
 

@@ -8,12 +8,25 @@
 !> Arguments: 'stokes' (the 'stokes' rung: spheres at the hand-overs 1 r, the scene's default, and
 !> 0.125 r, half a cell of D/dx = 8, then needles and disks), or 'resolved D width Re_p' (the
 !> immersed boundary, squeeze_case's run_free_squeeze from rest 2 radii apart to 5 nm, the
-!> hand-over of its incremental pressure, 0.5 cell; defaults 8 24 0.1).
+!> hand-over of its incremental pressure, 0.5 cell; defaults 8 24 0.1), or
+!> 'resolved-tips shape thin n_x n_yz Re_p [start [aspect]]' (the same for a needle pair tip to tip
+!> or a disk pair face to face, shape 'needle' or 'disk': the thin dimension (needle minor axis,
+!> disk thickness) thin cells, box n_x x n_yz x n_yz cells (1 mm along x), U_p r / nu = Re_p (r the
+!> volume-equivalent radius), from rest start cells apart (default 2) to 5 nm, aspect ratio aspect
+!> (default push_case_t's, 5); the decks' pressure-free projection and its hand-over, 0.75 cell).
+!> It prints the times from 1e-2 r and 1e-3 r to 10 nm and from 0.1 r to 1e-2 r over the
+!> curvature-scaled asymptote's, the asymptote's drag term over the whole in each range, and the
+!> split of the resistance at 0.1 r, 1e-2 r, 1e-3 r and 10 nm (resolved force over zeta U, model
+!> force over its leading term).
 program bench_push_pair
   use agglo_kinds, only: wp
+  use physical_constants, only: pi
   use parallel_env, only: parallel_start, parallel_stop, is_root
+  use error_handling, only: fatal
   use config_collision, only: default_lubrication_handover
-  use squeeze_case, only: free_squeeze_case_t, free_squeeze_history_t, run_free_squeeze, squeeze_dynamic_viscosity
+  use spheroid, only: spheroid_t, make_spheroid
+  use squeeze_case, only: free_squeeze_case_t, free_squeeze_history_t, run_free_squeeze, squeeze_dynamic_viscosity, &
+                          free_squeeze_sample
   use push_pair_case, only: push_case_t, push_history_t, run_stokes_push, quasi_steady_times, history_gap_error, &
                             history_time_error, history_time_at, tip_asymptote_time
   implicit none
@@ -26,6 +39,11 @@ program bench_push_pair
   call parallel_start()
   mode = 'stokes'
   if (command_argument_count() >= 1) call get_command_argument(1, mode)
+  if (trim(mode) == 'resolved-tips') then
+    call resolved_tips()
+    call parallel_stop()
+    stop
+  end if
   if (is_root()) write(*, '(a)') '| rung | pair | h_out | t(h)/t_ref(h) - 1 at h = r | 0.1 r | 1e-2 r | 1e-3 r | '// &
       '10 nm | max abs t(h)/t_ref - 1, 2 r .. 0.1 r | max abs h(t)/h_ref - 1, 2 r .. 0.1 r | '// &
       'time 1e-2 r -> 10 nm / ref - 1 |'
@@ -76,6 +94,106 @@ program bench_push_pair
 
 contains
 
+  !> The resolved rung of a needle or disk pair (program header): one table row.
+  subroutine resolved_tips()
+    type(spheroid_t) :: unit
+    type(push_history_t) :: tips
+    character(len=8) :: shape
+    real(wp) :: gap, speed
+    real(wp) :: thin_cells, marks(4), measured(4), reference(3), drag_share(3)
+    integer :: cells(2), k
+    character(len=160) :: row
+    character(len=16) :: steps_text
+    if (command_argument_count() < 6) call fatal('bench_push_pair resolved-tips: give shape thin n_x n_yz Re_p '// &
+                                                 '[start [aspect]], e.g. resolved-tips needle 6 96 24 0.003')
+    call get_command_argument(2, shape)
+    call get_command_argument(3, argument)
+    read(argument, *) thin_cells
+    call get_command_argument(4, argument)
+    read(argument, *) cells(1)
+    call get_command_argument(5, argument)
+    read(argument, *) cells(2)
+    call get_command_argument(6, argument)
+    read(argument, *) resolved%push_reynolds
+    resolved%start_gap_cells = 2.0_wp
+    if (command_argument_count() >= 7) then
+      call get_command_argument(7, argument)
+      read(argument, *) resolved%start_gap_cells
+    end if
+    resolved%aspect_ratio = case%aspect_ratio
+    if (command_argument_count() >= 8) then
+      call get_command_argument(8, argument)
+      read(argument, *) resolved%aspect_ratio
+    end if
+    if (shape /= 'needle' .and. shape /= 'disk') call fatal('bench_push_pair resolved-tips: shape '''//trim(shape)// &
+                                                            '''; allowed: needle, disk')
+    if (.not. (thin_cells >= 4.0_wp)) call fatal('bench_push_pair resolved-tips: the thin dimension must be >= 4 cells')
+    resolved%shape = shape
+    ! On the grid's mirror planes across x (y, z through cell faces): an offset across x seeds the
+    ! sliding of a face-to-face pair (the common normal tilts by the offset over the faces' radius of
+    ! curvature), which grows over the long squeeze of the disks.
+    resolved%offset_cells(2:3) = 0
+    resolved%box_cells = [cells(1), cells(2), cells(2)]
+    ! 2 r / dx from the thin dimension: 2 min(a, b) of the volume-equivalent radius 1 is thin / (2 r / dx).
+    unit = make_spheroid(trim(shape), 1.0_wp, 1.0_wp, resolved%aspect_ratio)
+    resolved%diameter_cells = thin_cells / min(unit%a, unit%b)
+    resolved%lubrication = .true.
+    ! The decks' pressure-free projection: with the incremental pressure two flat faces within about
+    ! a cell grow without bound (docs/theory.md); its hand-over is 0.75 cell.
+    resolved%pressure_scheme = 'non_incremental'
+    resolved%handover_cells = default_lubrication_handover('resolved', 'resolved', resolved%pressure_scheme, 1.0_wp, 1.0_wp)
+    resolved%max_steps = 400000
+    resolved%stop_gap_cells = 5.0e-9_wp / (1.0e-3_wp / cells(1))   ! 5 nm in cells of the 1 mm box
+    call run_free_squeeze(resolved, free)
+    tips%push = free%push
+    tips%axial_drag = free%axial_drag
+    tips%reduced_radius = free%reduced_radius
+    ! The ranges 1e-2 r -> 10 nm, 1e-3 r -> 10 nm and 0.1 r -> 1e-2 r.
+    marks = [0.1_wp * free%radius, 1.0e-2_wp * free%radius, 1.0e-3_wp * free%radius, 1.0e-8_wp]
+    measured = [(history_time_at(free%time, free%gap, marks(k)), k = 1, 4)]
+    reference = [tip_asymptote_time(tips, squeeze_dynamic_viscosity, marks(2), marks(4)), &
+                 tip_asymptote_time(tips, squeeze_dynamic_viscosity, marks(3), marks(4)), &
+                 tip_asymptote_time(tips, squeeze_dynamic_viscosity, marks(1), marks(2))]
+    drag_share = tips%axial_drag * [marks(2) - marks(4), marks(3) - marks(4), marks(1) - marks(2)] &
+                 / (2.0_wp * tips%push * reference)
+    if (.not. is_root()) return
+    write(steps_text, '(i0)') free%steps
+    write(*, '(a)') '| pair | aspect ratio | thin cells | box cells | 2 r / dx | start gap | U_p r/nu | '// &
+        'time 1e-2 r -> 10 nm / asymptote - 1 | 1e-3 r -> 10 nm | 0.1 r -> 1e-2 r | drag term / asymptote, '// &
+        'the three ranges | R_eff / r | steps | wall |'
+    write(*, '(a)') '|---|---|---|---|---|---|---|---|---|---|---|---|---|---|'
+    write(row, '(a,f0.1,a,f0.1,a,3(i0,a))') '| '//trim(shape)//'s | ', resolved%aspect_ratio, ' | ', thin_cells, &
+        ' | ', cells(1), ' x ', cells(2), ' x ', cells(2), ' | '
+    write(*, '(a)') trim(row)//' '//fixed(resolved%diameter_cells, '(f6.2)')//' | '// &
+        fixed(resolved%start_gap_cells, '(f6.2)')//' cells ('// &
+        fixed(resolved%start_gap_cells * 2.0_wp / resolved%diameter_cells, '(f6.3)')//' r) | '// &
+        fixed(resolved%push_reynolds, '(f8.4)')//' | '//pct((measured(4) - measured(2)) / reference(1) - 1.0_wp)//' | '// &
+        pct((measured(4) - measured(3)) / reference(2) - 1.0_wp)//' | '// &
+        pct((measured(2) - measured(1)) / reference(3) - 1.0_wp)//' | '//fixed(drag_share(1), '(f6.3)')//' / '// &
+        fixed(drag_share(2), '(f6.3)')//' / '//fixed(drag_share(3), '(f6.3)')//' | '// &
+        fixed(tips%reduced_radius / free%radius, '(f7.4)')//' | '// &
+        trim(steps_text)//' | '//fixed(free%wall_seconds, '(f0.1)')//' s |'
+    write(*, '(a,l1,a,i0,a)') '  reached ', free%reached, ', most ghost-row sweeps ', free%max_sweeps_seen, &
+        ', zeta / (6 pi mu r) '//fixed(free%axial_drag / (6.0_wp * pi * squeeze_dynamic_viscosity * free%radius), &
+        '(f7.4)')//', r '//fixed(free%radius, '(es10.3)')//' m, at the end lateral offset '// &
+        fixed(free%lateral_offset / free%cell, '(es9.2)')//' cells, tilt '//fixed(free%tilt, '(es9.2)')//' rad'
+    ! The split of the resistance at 0.1 r, 1e-2 r, 1e-3 r and 10 nm: the resolved force over zeta U,
+    ! the model's over the leading term of its R_sub(h) 2 U (6 pi mu R_eff^2 (1/h - 1/h_out), the
+    ! relative speed 2 U).
+    do k = 1, 4
+      gap = marks(k)
+      speed = free_squeeze_sample(free, free%speed, gap)
+      row = 'above h_out'
+      if (gap < resolved%handover_cells * free%cell) row = fixed(free_squeeze_sample(free, free%lubrication, gap) &
+          / (6.0_wp * pi * squeeze_dynamic_viscosity * tips%reduced_radius**2 &
+             * (1.0_wp / gap - 1.0_wp / (resolved%handover_cells * free%cell)) * 2.0_wp * speed), '(f8.4)')
+      write(*, '(a)') '  h / r '//fixed(gap / free%radius, '(es9.2)')//': U / (F / zeta) '// &
+          fixed(speed * free%axial_drag / free%push, '(f8.4)')//', resolved / (zeta U) '// &
+          fixed(free_squeeze_sample(free, free%resolved, gap) / (free%axial_drag * speed), '(f8.4)')// &
+          ', model / (6 pi mu R_eff^2 (1/h - 1/h_out) 2 U) '//trim(row)
+    end do
+  end subroutine resolved_tips
+
   !> One row: t(h) / t_ref(h) - 1 at h = r, 0.1 r, 1e-2 r, 1e-3 r and 10 nm, the largest |t(h) /
   !> t_ref(h) - 1| and |h(t) / h_ref(t) - 1| over 2 r .. 0.1 r (20 gaps a decade), and the time from
   !> 1e-2 r to 10 nm over the reference's.
@@ -107,6 +225,16 @@ contains
              - history_time_at(history%time, history%gap, 1.0e-2_wp * case%radius)) &
             / tip_asymptote_time(history, case%viscosity, 1.0e-2_wp * case%radius, 1.0e-8_wp) - 1.0_wp), ' (asymptote) |'
   end subroutine report_tips
+
+  !> x written with the edit descriptor format, without blanks.
+  function fixed(x, format) result(text)
+    real(wp), intent(in) :: x
+    character(len=*), intent(in) :: format
+    character(len=:), allocatable :: text
+    character(len=32) :: buffer
+    write(buffer, format) x
+    text = trim(adjustl(buffer))
+  end function fixed
 
   function pct(x) result(text)
     real(wp), intent(in) :: x
