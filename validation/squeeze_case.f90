@@ -42,6 +42,7 @@ module squeeze_case
   use config_fluid, only: fluid_config_t
   use fluid_solver, only: fluid_solver_t, fluid_solver_create
   use spheroid, only: spheroid_t, make_spheroid
+  use config_collision, only: default_lubrication_handover
   use immersed_boundary, only: ibm_settings_t
   use immersed_scene, only: prescribed_motion_t, immersed_scene_t, immersed_scene_options_t, immersed_scene_create, immersed_step
   use forcing_driver, only: forcing_driver_t
@@ -59,6 +60,7 @@ module squeeze_case
   public :: squeeze_case_t, squeeze_result_t, run_squeeze, brenner_squeeze_coefficient, squeeze_speed, &
             squeeze_dynamic_viscosity
   public :: free_squeeze_case_t, free_squeeze_history_t, run_free_squeeze, approach_reference, free_squeeze_sample
+  public :: pushed_tips_case
   public :: squeeze_fluid, squeeze_hold_to_steady_state
 
   type :: squeeze_case_t
@@ -138,6 +140,37 @@ module squeeze_case
   real(wp), parameter :: squeeze_dynamic_viscosity = density * viscosity  !< Pa s, mu
 
 contains
+
+  !> The free approach of a needle pair tip to tip or a disk pair face to face (module header):
+  !> the thin dimension (needle minor axis, disk thickness) thin_cells cells, box box_cells, 1 mm
+  !> along x, U_p r / nu = push_reynolds, from rest start_gap_cells apart until the gap falls below
+  !> stop_gap (m), with the sub-grid lubrication at the hand-over of the decks' pressure-free
+  !> projection (with the incremental pressure two flat faces within about a cell grow without
+  !> bound, docs/theory.md). The pair sits on the grid's mirror planes across x: an offset across x
+  !> seeds the sliding of a face-to-face pair (the common normal tilts by the offset over the faces'
+  !> radius of curvature), which grows over the long squeeze of the disks.
+  function pushed_tips_case(shape, aspect_ratio, thin_cells, box_cells, push_reynolds, start_gap_cells, stop_gap) &
+      result(case)
+    character(len=*), intent(in) :: shape
+    real(wp), intent(in) :: aspect_ratio, thin_cells, push_reynolds, start_gap_cells, stop_gap
+    integer, intent(in) :: box_cells(3)
+    type(free_squeeze_case_t) :: case
+    type(spheroid_t) :: unit
+    case%shape = shape
+    case%aspect_ratio = aspect_ratio
+    ! 2 r / dx from the thin dimension: 2 min(a, b) of the volume-equivalent radius 1 is thin / (2 r / dx).
+    unit = make_spheroid(trim(shape), 1.0_wp, 1.0_wp, aspect_ratio)
+    case%diameter_cells = thin_cells / min(unit%a, unit%b)
+    case%box_cells = box_cells
+    case%offset_cells(2:3) = 0
+    case%start_gap_cells = start_gap_cells
+    case%push_reynolds = push_reynolds
+    case%lubrication = .true.
+    case%pressure_scheme = 'non_incremental'
+    case%handover_cells = default_lubrication_handover('resolved', 'resolved', case%pressure_scheme, 1.0_wp, 1.0_wp)
+    case%max_steps = 400000
+    case%stop_gap_cells = stop_gap / (box / box_cells(1))
+  end function pushed_tips_case
 
   !> Brenner's beta (module header) for two equal spheres at gap h / a = gap_over_radius > 0, summed
   !> until a term is below 1e-15 of the sum.

@@ -16,9 +16,9 @@
 program test_free_push_disks
   use agglo_kinds, only: wp
   use parallel_env, only: parallel_start
-  use config_collision, only: default_lubrication_handover
   use spheroid, only: spheroid_t, make_spheroid
-  use squeeze_case, only: free_squeeze_case_t, free_squeeze_history_t, run_free_squeeze, squeeze_dynamic_viscosity
+  use squeeze_case, only: free_squeeze_case_t, free_squeeze_history_t, run_free_squeeze, squeeze_dynamic_viscosity, &
+                          pushed_tips_case
   use push_pair_case, only: push_history_t, history_time_at, tip_asymptote_time
   use test_framework, only: test_start, test_finish, check, check_close
   implicit none
@@ -30,20 +30,10 @@ program test_free_push_disks
 
   call parallel_start()
   call test_start('free_push_disks')
-  case%shape = 'disk'
-  case%aspect_ratio = 5.0_wp
-  unit = make_spheroid('disk', 1.0_wp, 1.0_wp, case%aspect_ratio)
-  case%diameter_cells = 4.0_wp / min(unit%a, unit%b)   ! 4 cells thin
-  case%box_cells = [24, 32, 32]
-  case%offset_cells(2:3) = 0
-  case%start_gap_cells = 1.0_wp
-  case%push_reynolds = 10.0_wp
-  case%lubrication = .true.
-  case%pressure_scheme = 'non_incremental'
-  case%handover_cells = default_lubrication_handover('resolved', 'resolved', case%pressure_scheme, 1.0_wp, 1.0_wp)
-  case%max_steps = 100000
-  case%stop_gap_cells = 1.0e-8_wp / (1.0e-3_wp / case%box_cells(1))   ! 10 nm in cells of the 1 mm box
+  ! 4 cells thin, from rest a cell apart to 10 nm.
+  case = pushed_tips_case('disk', 5.0_wp, 4.0_wp, [24, 32, 32], 10.0_wp, 1.0_wp, 1.0e-8_wp)
   call run_free_squeeze(case, history)
+  unit = make_spheroid('disk', 1.0_wp, 1.0_wp, case%aspect_ratio)
   call check(history%reached .and. history%lateral_offset < 1.0e-9_wp * history%cell &
              .and. history%tilt < 1.0e-9_wp, 'pair_closes_to_10_nm_coaxial')
   call check_close(history%reduced_radius, 0.5_wp * unit%b**2 / unit%a * history%radius, 1.0e-6_wp, &

@@ -24,9 +24,8 @@ program bench_push_pair
   use parallel_env, only: parallel_start, parallel_stop, is_root
   use error_handling, only: fatal
   use config_collision, only: default_lubrication_handover
-  use spheroid, only: spheroid_t, make_spheroid
   use squeeze_case, only: free_squeeze_case_t, free_squeeze_history_t, run_free_squeeze, squeeze_dynamic_viscosity, &
-                          free_squeeze_sample
+                          free_squeeze_sample, pushed_tips_case
   use push_pair_case, only: push_case_t, push_history_t, run_stokes_push, quasi_steady_times, history_gap_error, &
                             history_time_error, history_time_at, tip_asymptote_time
   implicit none
@@ -96,10 +95,9 @@ contains
 
   !> The resolved rung of a needle or disk pair (program header): one table row.
   subroutine resolved_tips()
-    type(spheroid_t) :: unit
     type(push_history_t) :: tips
     character(len=8) :: shape
-    real(wp) :: gap, speed
+    real(wp) :: gap, speed, start_gap, aspect_ratio, push_reynolds
     real(wp) :: thin_cells, marks(4), measured(4), reference(3), drag_share(3)
     integer :: cells(2), k
     character(len=160) :: row
@@ -114,36 +112,22 @@ contains
     call get_command_argument(5, argument)
     read(argument, *) cells(2)
     call get_command_argument(6, argument)
-    read(argument, *) resolved%push_reynolds
-    resolved%start_gap_cells = 2.0_wp
+    read(argument, *) push_reynolds
+    start_gap = 2.0_wp
     if (command_argument_count() >= 7) then
       call get_command_argument(7, argument)
-      read(argument, *) resolved%start_gap_cells
+      read(argument, *) start_gap
     end if
-    resolved%aspect_ratio = case%aspect_ratio
+    aspect_ratio = case%aspect_ratio
     if (command_argument_count() >= 8) then
       call get_command_argument(8, argument)
-      read(argument, *) resolved%aspect_ratio
+      read(argument, *) aspect_ratio
     end if
     if (shape /= 'needle' .and. shape /= 'disk') call fatal('bench_push_pair resolved-tips: shape '''//trim(shape)// &
                                                             '''; allowed: needle, disk')
     if (.not. (thin_cells >= 4.0_wp)) call fatal('bench_push_pair resolved-tips: the thin dimension must be >= 4 cells')
-    resolved%shape = shape
-    ! On the grid's mirror planes across x (y, z through cell faces): an offset across x seeds the
-    ! sliding of a face-to-face pair (the common normal tilts by the offset over the faces' radius of
-    ! curvature), which grows over the long squeeze of the disks.
-    resolved%offset_cells(2:3) = 0
-    resolved%box_cells = [cells(1), cells(2), cells(2)]
-    ! 2 r / dx from the thin dimension: 2 min(a, b) of the volume-equivalent radius 1 is thin / (2 r / dx).
-    unit = make_spheroid(trim(shape), 1.0_wp, 1.0_wp, resolved%aspect_ratio)
-    resolved%diameter_cells = thin_cells / min(unit%a, unit%b)
-    resolved%lubrication = .true.
-    ! The decks' pressure-free projection: with the incremental pressure two flat faces within about
-    ! a cell grow without bound (docs/theory.md); its hand-over is 0.75 cell.
-    resolved%pressure_scheme = 'non_incremental'
-    resolved%handover_cells = default_lubrication_handover('resolved', 'resolved', resolved%pressure_scheme, 1.0_wp, 1.0_wp)
-    resolved%max_steps = 400000
-    resolved%stop_gap_cells = 5.0e-9_wp / (1.0e-3_wp / cells(1))   ! 5 nm in cells of the 1 mm box
+    resolved = pushed_tips_case(shape, aspect_ratio, thin_cells, [cells(1), cells(2), cells(2)], push_reynolds, &
+                                start_gap, 5.0e-9_wp)
     call run_free_squeeze(resolved, free)
     tips%push = free%push
     tips%axial_drag = free%axial_drag
