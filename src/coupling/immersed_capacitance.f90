@@ -1,7 +1,9 @@
 !> The Crank-Nicolson predictor's system with the immersed-boundary rows, A u = b, solved on the
 !> ghost rows only: a capacitance-matrix formulation (Buzbee, Dorr, George & Golub 1971, SIAM J.
-!> Numer. Anal. 8, 722; Proskurowski & Widlund 1976) with GMRES (Saad & Schultz 1986) on the
-!> reduced system (docs/theory.md, "Linear solver (hypre)"; docs/studies/performance.md).
+!> Numer. Anal. 8, 722; Proskurowski & Widlund 1976) with flexible GMRES (Saad 1993; gmres_cycle)
+!> on the reduced system, preconditioned by a sparse approximation of its matrix solved on each
+!> rank (capacitance_preconditioner) (docs/theory.md, "Linear solver (hypre)";
+!> docs/studies/performance.md).
 !>
 !> A differs from the periodic Helmholtz operator H = I - alpha L_h (which the FFT inverts exactly)
 !> only in the ghost rows G and the interior rows I. The fluid rows' 7-point stencils hold fluid and
@@ -11,10 +13,11 @@
 !> solution of A u = b is u(z) with the interior values put in, for the z that makes the ghost rows
 !> hold:   C z = r0,   C = A_G|_{F,G} H^{-1} P_G^T,   r0 = b_G - A_G u_mix(0)
 !> (u_mix: the interior nodes at their rigid values). C has one row and column per ghost node;
-!> applying it is one FFT Helmholtz solve and the ghost rows' stencils. Every outer cycle forms u(z)
-!> again with one FFT solve and checks the true residual of the whole system: the fluid rows hold
-!> to the FFT's rounding and the interior rows exactly, so ||b - A u|| = ||b_G - A_G u_mix|| and the
-!> stopping rule ||b - A u||_2 <= tolerance ||b||_2 is hypre's (hypre_solver) on the same rows.
+!> applying it is one FFT Helmholtz solve and the ghost rows' stencils. Every outer cycle updates
+!> u(z) from the images it kept (no further FFT solve) and checks the true residual of the whole
+!> system: the fluid rows hold to the FFT's rounding and the interior rows exactly, so
+!> ||b - A u|| = ||b_G - A_G u_mix|| and the stopping rule ||b - A u||_2 <= tolerance ||b||_2 is
+!> hypre's (hypre_solver) on the same rows.
 !> The first z comes from u^n (capacitance_first_guess; the checkpoint holds u^n, so a restart
 !> continues bit for bit), else 0.
 module immersed_capacitance
@@ -23,42 +26,36 @@ module immersed_capacitance
   use agglo_kinds, only: wp
   use parallel_env, only: world, mpi_wp
   use fluid_grid, only: fluid_grid_t
-  use immersed_nodes, only: ghost_node_t, component_nodes_t
+  use immersed_nodes, only: component_nodes_t, ghost_row_diagonal
   use hypre_fft_preconditioner, only: fft_helmholtz_preconditioner_t
+  use timer_registry, only: timer_tic, timer_toc
+  use gmres_cycle, only: gmres_cycle_t, gmres_prepare, gmres_begin, gmres_orthogonalise, gmres_coefficients
+  use capacitance_preconditioner, only: local_capacitance_t, local_capacitance_green, local_capacitance_assemble, &
+                                        local_capacitance_solve
   implicit none
   private
-  public :: capacitance_work_t, capacitance_result_t, capacitance_solve, capacitance_first_guess, ghost_row_diagonal
+  public :: capacitance_work_t, capacitance_result_t, capacitance_solve, capacitance_first_guess
 
   !> Work arrays of the reduced solve, kept between steps (no allocation per step at fixed sizes).
   type :: capacitance_work_t
     real(wp), allocatable :: forcing(:)                 !< rows: b + P^T z, or M v on the ghost rows
-    real(wp), allocatable :: images(:, :)               !< (rows, j) H^{-1} of each M v_j of a cycle
+    real(wp), allocatable :: images(:, :)               !< (rows, j) H^{-1} P_G^T w_j of a cycle
     real(wp), allocatable :: below(:, :, :), above(:, :, :)   !< the neighbours' planes the stencils read
     real(wp), allocatable :: send_up(:), send_down(:)        !< this slab's top and bottom planes
-    real(wp), allocatable :: basis(:, :)                !< (n_ghost, restart + 1) Krylov basis
-    real(wp), allocatable :: hessenberg(:, :)           !< (restart + 1, restart)
-    real(wp), allocatable :: cosines(:), sines(:), projected(:)
-    integer, allocatable :: ghost_of_row(:)             !< rows: the ghost's index, 0 elsewhere
-    integer, allocatable :: neighbours(:, :)            !< (6, n_ghost) ghost neighbours on this slab, 0 none
-    real(wp) :: weights(0:3) = 0                        !< H's diagonal and its x, y, z neighbour entries
+    type(gmres_cycle_t) :: krylov                       !< the outer (flexible) GMRES cycle on the ghost rows
+    real(wp), allocatable :: preconditioned(:, :)       !< (n_ghost, restart) w_j = P v_j of a cycle
+    type(local_capacitance_t) :: preconditioner         !< P ~ C^{-1}
   end type capacitance_work_t
 
   type :: capacitance_result_t
     logical :: converged = .false.
     integer :: iterations = 0          !< GMRES iterations (one FFT solve each)
+    integer :: inner_iterations = 0    !< GMRES iterations of the preconditioner's solves (no FFT), this rank
     integer :: fft_solves = 0          !< all FFT Helmholtz solves (iterations + one per outer cycle)
     real(wp) :: relative_residual = huge(1.0_wp)   !< ||b - A u||_2 / ||b||_2, the true one
   end type capacitance_result_t
 
 contains
-
-  !> The diagonal entry of a ghost row (Mark & van Wachem 2008, Eq. 7): 1 + kappa w_G, w_G the
-  !> weight of G in its own stencil.
-  pure real(wp) function ghost_row_diagonal(ghost)
-    type(ghost_node_t), intent(in) :: ghost
-    ghost_row_diagonal = 1.0_wp
-    if (ghost%self_corner > 0) ghost_row_diagonal = 1.0_wp + ghost%extrapolation * ghost%weight(ghost%self_corner)
-  end function ghost_row_diagonal
 
   !> Solve A solution = rhs (collective). rhs: this rank's rows, with the ghost rows' and interior
   !> rows' right-hand sides in place (as for the whole system); ghost_rows, interior_rows: their
@@ -82,17 +79,20 @@ contains
     real(wp), intent(inout) :: z(:)
     real(wp), intent(out) :: solution(:)
     type(capacitance_result_t), intent(out) :: result
-    real(wp), allocatable :: diagonal(:)
-    real(wp) :: target_norm, residual_norm, estimate, norms(1), temp, scaled_target
-    real(wp), allocatable :: residual(:), coefficients(:), y(:)
-    integer :: ng, m, j, i
+    real(wp) :: target_norm, residual_norm, estimate, norms(1)
+    real(wp), allocatable :: residual(:), y(:)
+    logical :: breakdown
+    integer :: ng, m, j, inner_before
 
     ng = size(ghost_rows)
     m = max(1, min(restart, max_iterations))
     call prepare(work, grid, size(rhs), ng, m, halo)
-    call ghost_neighbours(work, grid, nodes, ghost_rows, size(rhs), fft%coefficient)
-    allocate(residual(ng), coefficients(m + 1), y(m), diagonal(ng))
-    diagonal = [(ghost_row_diagonal(nodes%ghost(i)), i = 1, ng)]
+    inner_before = work%preconditioner%inner_total
+    call timer_tic('  capacitance matrix')
+    call local_capacitance_green(work%preconditioner, grid, fft, size(rhs))
+    call local_capacitance_assemble(work%preconditioner, grid, nodes)
+    call timer_toc('  capacitance matrix')
+    allocate(residual(ng), y(m))
     norms(1) = sum(rhs**2)
     call MPI_Allreduce(MPI_IN_PLACE, norms, 1, mpi_wp, MPI_SUM, world)
     target_norm = tolerance * sqrt(norms(1))
@@ -117,75 +117,39 @@ contains
       end if
       if (result%iterations >= max_iterations) exit
 
-      ! One GMRES cycle on D^{-1} C M d = D^{-1} residual from d = 0 (D the ghost rows' diagonals,
-      ! M = P_G H P_G^T, the Helmholtz operator among the ghost nodes: H^{-1} restricted to the
-      ! ghost nodes is close to its inverse), then z = z + M d and u = u + H^{-1} P_G^T M d from
-      ! the images kept (no further FFT solve).
-      residual = residual / diagonal
-      temp = residual_norm
-      residual_norm = global_norm(residual)
-      scaled_target = target_norm * residual_norm / temp
-      work%basis(:, 1) = residual / residual_norm
-      work%projected = 0
-      work%projected(1) = residual_norm
+      ! One flexible GMRES cycle on C d = residual from d = 0, right-preconditioned by the local
+      ! capacitance solve P ~ C^{-1} (capacitance_preconditioner): w_j = P v_j kept, its H^{-1}
+      ! image with the interior values held at 0, the ghost rows' stencils; then z = z + W y and
+      ! u = u + (images) y (no further FFT solve).
+      call gmres_begin(work%krylov, residual, residual_norm)
       j = 0
       do while (j < m .and. result%iterations < max_iterations)
         j = j + 1
         result%iterations = result%iterations + 1
-        ! C M v_j: M v_j, its H^{-1} image with the interior values held at 0, the ghost rows' stencils.
-        call apply_ghost_helmholtz(work, work%basis(:, j), residual)
-        work%forcing(ghost_rows) = residual
+        call timer_tic('  capacitance solves')
+        call local_capacitance_solve(work%preconditioner, work%krylov%basis(:, j), work%preconditioned(:, j))
+        call timer_toc('  capacitance solves')
+        work%forcing(ghost_rows) = work%preconditioned(:, j)
         if (size(work%images, 2) < j) call grow_images(work, j)
         call fft%apply(work%forcing, work%images(:, j))
         result%fft_solves = result%fft_solves + 1
         work%images(interior_rows, j) = 0
-        call apply_ghost_rows(work, grid, nodes, halo, stencils_leave_slab, work%images(:, j), work%basis(:, j + 1))
-        work%basis(:, j + 1) = work%basis(:, j + 1) / diagonal
-        ! Classical Gram-Schmidt twice: one reduction of j inner products per pass.
-        ! The second pass's reduction carries the squared norm before it: its coefficients are of
-        ! rounding size, so the norm after it follows without cancellation (Pythagoras).
-        work%hessenberg(:, j) = 0
-        do i = 1, 2
-          coefficients(1:j) = matmul(work%basis(:, j + 1), work%basis(:, 1:j))
-          coefficients(j + 1) = 0
-          if (i == 2) coefficients(j + 1) = sum(work%basis(:, j + 1)**2)
-          call MPI_Allreduce(MPI_IN_PLACE, coefficients, j + 1, mpi_wp, MPI_SUM, world)
-          work%basis(:, j + 1) = work%basis(:, j + 1) - matmul(work%basis(:, 1:j), coefficients(1:j))
-          work%hessenberg(1:j, j) = work%hessenberg(1:j, j) + coefficients(1:j)
-        end do
-        work%hessenberg(j + 1, j) = sqrt(max(coefficients(j + 1) - sum(coefficients(1:j)**2), 0.0_wp))
-        if (work%hessenberg(j + 1, j) > 0.0_wp) work%basis(:, j + 1) = work%basis(:, j + 1) / work%hessenberg(j + 1, j)
-        ! The earlier Givens rotations on the new column, then its own (the least-squares residual).
-        do i = 1, j - 1
-          temp = work%cosines(i) * work%hessenberg(i, j) + work%sines(i) * work%hessenberg(i + 1, j)
-          work%hessenberg(i + 1, j) = -work%sines(i) * work%hessenberg(i, j) + work%cosines(i) * work%hessenberg(i + 1, j)
-          work%hessenberg(i, j) = temp
-        end do
-        temp = hypot(work%hessenberg(j, j), work%hessenberg(j + 1, j))
-        if (.not. (temp > 0.0_wp)) then
-          ! A breakdown (the Krylov space is invariant and the last vector adds nothing): solve with
-          ! the columns so far; the outer loop checks the true residual.
+        call apply_ghost_rows(work, grid, nodes, halo, stencils_leave_slab, work%images(:, j), work%krylov%basis(:, j + 1))
+        call gmres_orthogonalise(work%krylov, j, estimate, breakdown)
+        if (breakdown) then
+          ! The Krylov space is invariant: solve with the columns so far; the outer loop checks the
+          ! true residual.
           j = j - 1
           exit
         end if
-        work%cosines(j) = work%hessenberg(j, j) / temp
-        work%sines(j) = work%hessenberg(j + 1, j) / temp
-        work%hessenberg(j, j) = temp
-        work%hessenberg(j + 1, j) = 0
-        work%projected(j + 1) = -work%sines(j) * work%projected(j)
-        work%projected(j) = work%cosines(j) * work%projected(j)
-        estimate = abs(work%projected(j + 1))
-        if (estimate <= scaled_target) exit
+        if (estimate <= target_norm) exit
       end do
       if (j == 0) exit
-      ! y from the triangle; z += M V y, u += (images) y.
-      do i = j, 1, -1
-        y(i) = (work%projected(i) - dot_product(work%hessenberg(i, i + 1:j), y(i + 1:j))) / work%hessenberg(i, i)
-      end do
-      call apply_ghost_helmholtz(work, matmul(work%basis(:, 1:j), y(1:j)), residual)
-      z = z + residual
+      call gmres_coefficients(work%krylov, j, y)
+      z = z + matmul(work%preconditioned(:, 1:j), y(1:j))
       solution = solution + matmul(work%images(:, 1:j), y(1:j))
     end do
+    result%inner_iterations = work%preconditioner%inner_total - inner_before
   end subroutine capacitance_solve
 
   !> Work arrays sized for this solve.
@@ -202,67 +166,12 @@ contains
     end if
     if (.not. allocated(work%images)) allocate(work%images(n_rows, 0))
     call prepare_planes(work, grid, halo)
-    if (allocated(work%basis)) then
-      if (any(shape(work%basis) /= [ng, m + 1])) deallocate(work%basis, work%hessenberg, work%cosines, work%sines, &
-                                                            work%projected)
+    call gmres_prepare(work%krylov, ng, m, collective=.true.)
+    if (allocated(work%preconditioned)) then
+      if (any(shape(work%preconditioned) /= [ng, m])) deallocate(work%preconditioned)
     end if
-    if (.not. allocated(work%basis)) allocate(work%basis(ng, m + 1), work%hessenberg(m + 1, m), work%cosines(m), &
-                                              work%sines(m), work%projected(m + 1))
+    if (.not. allocated(work%preconditioned)) allocate(work%preconditioned(ng, m))
   end subroutine prepare
-
-  !> The neighbours of each ghost node among this slab's ghost nodes (x, y periodic; z within the
-  !> slab) and H's entries: M = P_G H P_G^T, this rank's block of it (a preconditioner needs no more,
-  !> and so needs no communication).
-  subroutine ghost_neighbours(work, grid, nodes, ghost_rows, n_rows, alpha)
-    type(capacitance_work_t), intent(inout) :: work
-    type(fluid_grid_t), intent(in) :: grid
-    type(component_nodes_t), intent(in) :: nodes
-    integer, intent(in) :: ghost_rows(:), n_rows
-    real(wp), intent(in) :: alpha
-    integer :: g, i, j, k
-    if (allocated(work%ghost_of_row)) then
-      if (size(work%ghost_of_row) /= n_rows) deallocate(work%ghost_of_row)
-    end if
-    if (.not. allocated(work%ghost_of_row)) allocate(work%ghost_of_row(n_rows))
-    if (allocated(work%neighbours)) deallocate(work%neighbours)
-    allocate(work%neighbours(6, nodes%n_ghost))
-    work%ghost_of_row = 0
-    work%ghost_of_row(ghost_rows) = [(g, g = 1, nodes%n_ghost)]
-    do g = 1, nodes%n_ghost
-      i = nodes%ghost(g)%node(1)
-      j = nodes%ghost(g)%node(2)
-      k = nodes%ghost(g)%node(3)
-      work%neighbours(1, g) = work%ghost_of_row(row_of(modulo(i - 2, grid%nx) + 1, j, k))
-      work%neighbours(2, g) = work%ghost_of_row(row_of(modulo(i, grid%nx) + 1, j, k))
-      work%neighbours(3, g) = work%ghost_of_row(row_of(i, modulo(j - 2, grid%ny) + 1, k))
-      work%neighbours(4, g) = work%ghost_of_row(row_of(i, modulo(j, grid%ny) + 1, k))
-      work%neighbours(5, g) = 0
-      work%neighbours(6, g) = 0
-      if (k > 1) work%neighbours(5, g) = work%ghost_of_row(row_of(i, j, k - 1))
-      if (k < grid%nz_local) work%neighbours(6, g) = work%ghost_of_row(row_of(i, j, k + 1))
-    end do
-    work%weights(1:3) = -alpha / [grid%dx**2, grid%dy**2, grid%dz**2]
-    work%weights(0) = 1.0_wp - 2.0_wp * sum(work%weights(1:3))
-  contains
-    integer function row_of(ii, jj, kk)
-      integer, intent(in) :: ii, jj, kk
-      row_of = ii + grid%nx * ((jj - 1) + grid%ny * (kk - 1))
-    end function row_of
-  end subroutine ghost_neighbours
-
-  !> M v, v on this rank's ghost nodes (ghost_neighbours).
-  subroutine apply_ghost_helmholtz(work, v, product)
-    type(capacitance_work_t), intent(in) :: work
-    real(wp), intent(in) :: v(:)
-    real(wp), intent(out) :: product(:)
-    integer :: g, n
-    do g = 1, size(v)
-      product(g) = work%weights(0) * v(g)
-      do n = 1, 6
-        if (work%neighbours(n, g) > 0) product(g) = product(g) + work%weights((n + 1) / 2) * v(work%neighbours(n, g))
-      end do
-    end do
-  end subroutine apply_ghost_helmholtz
 
   !> Room for j images: the columns grow to what the cycles have needed (a few; the restart
   !> length at most), kept between solves.

@@ -12,7 +12,7 @@ module immersed_nodes
   implicit none
   private
   public :: immersed_body_t, immersed_options_t, ghost_node_t, component_nodes_t
-  public :: node_position, thin_dimension_cells, wrap
+  public :: node_position, thin_dimension_cells, wrap, ghost_row_diagonal
   public :: node_fluid, node_ghost, node_interior
 
   integer(int8), parameter :: node_fluid = 0_int8, node_ghost = 1_int8, node_interior = 2_int8
@@ -79,6 +79,14 @@ module immersed_nodes
   end type component_nodes_t
 
 contains
+
+  !> The diagonal entry of a ghost row (Mark & van Wachem 2008, Eq. 7): 1 + kappa w_G, w_G the
+  !> weight of G in its own stencil.
+  pure real(wp) function ghost_row_diagonal(ghost)
+    type(ghost_node_t), intent(in) :: ghost
+    ghost_row_diagonal = 1.0_wp
+    if (ghost%self_corner > 0) ghost_row_diagonal = 1.0_wp + ghost%extrapolation * ghost%weight(ghost%self_corner)
+  end function ghost_row_diagonal
 
   !> Position (m) of node (i, j, k) of velocity component `component` (1 u, 2 v, 3 w), i and j
   !> global, k local to this rank (any integers: the positions continue beyond the box).

@@ -50,10 +50,10 @@ module immersed_predictor
                                   rows_to_field
   use hypre_fft_preconditioner, only: fft_helmholtz_preconditioner_t, fft_preconditioner_create
   use immersed_geometry, only: ghost_node_t
+  use immersed_nodes, only: ghost_row_diagonal
   use immersed_boundary, only: immersed_boundary_t, imposition_report_t, rigid_velocity, ghost_surface_value
   use immersed_loads, only: account
-  use immersed_capacitance, only: capacitance_work_t, capacitance_result_t, capacitance_solve, capacitance_first_guess, &
-                                  ghost_row_diagonal
+  use immersed_capacitance, only: capacitance_work_t, capacitance_result_t, capacitance_solve, capacitance_first_guess
   implicit none
   private
   public :: immersed_predictor_t, immersed_predictor_create, immersed_predictor_reclassified, &
@@ -103,6 +103,7 @@ module immersed_predictor
     integer :: updates = 0                            !< of those (per component), values only (same structure)
     integer :: full_builds = 0                        !< component matrices built with a new pattern
     integer :: fft_solves = 0                         !< FFT Helmholtz solves of the capacitance method, summed
+    integer :: preconditioner_iterations = 0          !< its preconditioner's GMRES iterations (rank 0's), summed
   contains
     procedure :: solve => immersed_predictor_solve
   end type immersed_predictor_t
@@ -133,6 +134,8 @@ contains
     c = timer_register('hypre')
     c = timer_register('ghost-row GMRES')
     c = timer_register('  FFT preconditioner')
+    c = timer_register('  capacitance matrix')
+    c = timer_register('  capacitance solves')
     c = timer_register('hypre matrices')
     if (.not. associated(predictor%grid)) allocate(predictor%grid, predictor%fft)
     predictor%grid = grid
@@ -472,6 +475,7 @@ contains
     status%tolerance = self%config%tolerance
     status%max_iterations = self%config%max_iterations
     self%fft_solves = self%fft_solves + result%fft_solves
+    self%preconditioner_iterations = self%preconditioner_iterations + result%inner_iterations
     call timer_toc('ghost-row GMRES')
   end subroutine solve_reduced
 

@@ -381,7 +381,8 @@ contains
       call log_line('immersed scene: Crank-Nicolson predictor with the body rows: GMRES on the ghost rows with the '// &
           'FFT Helmholtz solve, body rows listed '//int_text(scene%predictor%builds)//' times in '// &
           real_text(scene%predictor%build_seconds)//' s, FFT solves '//int_text(scene%predictor%fft_solves)// &
-          ', solves '//real_text(scene%predictor%solve_seconds)// &
+          ' (local capacitance preconditioner: '//int_text(scene%predictor%preconditioner_iterations)// &
+          ' GMRES iterations on rank 0), solves '//real_text(scene%predictor%solve_seconds)// &
           ' s; last step GMRES iterations '//int_text(scene%predicted%sweeps)//', relative residual '// &
           real_text(scene%predicted%residual)//', slip '//real_text(scene%projected%largest_change)// &
           ', cut-cell divergence '//real_text(scene%divergence)//' 1/s')
