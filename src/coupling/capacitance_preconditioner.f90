@@ -126,7 +126,7 @@ contains
     type(local_capacitance_t), intent(inout) :: self
     type(fluid_grid_t), intent(in) :: grid
     type(component_nodes_t), intent(in) :: nodes
-    integer :: g, corner, n_touched, n_entries, capacity
+    integer :: g, corner, position, n_touched, n_entries, capacity
     real(wp) :: coefficient
     integer :: node(3)
 
@@ -157,8 +157,8 @@ contains
       n_entries = n_entries + n_touched
       self%row_start(g + 1) = n_entries + 1
       self%diagonal(g) = 0
-      do corner = self%row_start(g), n_entries
-        if (self%column(corner) == g) self%diagonal(g) = self%entry(corner)
+      do position = self%row_start(g), n_entries
+        if (self%column(position) == g) self%diagonal(g) = self%entry(position)
       end do
       if (.not. (abs(self%diagonal(g)) > 0.0_wp)) self%diagonal(g) = 1.0_wp
     end do
