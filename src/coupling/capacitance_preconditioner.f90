@@ -10,13 +10,16 @@
 !> window of a few cells in each direction gives a sparse matrix C~ close to C, with no FFT:
 !> g itself costs one FFT Helmholtz solve whenever alpha changes (once per run at a fixed dt). The
 !> capacitance-matrix idea of Buzbee, Dorr, George & Golub (1971, SIAM J. Numer. Anal. 8, 722)
-!> with C formed explicitly, here truncated; the preconditioner keeps only the couplings among the
-!> ghost nodes of one rank (block Jacobi over the slabs: no communication), and its system is
-!> solved by a few GMRES iterations on the rank's rows with C~'s diagonal as right preconditioner.
+!> with C formed explicitly, here truncated. Each rank holds the rows of its ghost nodes; their
+!> columns include the neighbouring slabs' ghost nodes within the window (their nodes exchanged
+!> once per assembly, their values once per product), so C~ does not depend on the rank count
+!> and bodies across a slab boundary keep their couplings. Its system is solved by a few GMRES
+!> iterations (collective) with C~'s diagonal as right preconditioner.
 !> The outer GMRES is flexible (the inner solve is not a fixed linear map), and its stopping rule
 !> is on the true residual: the preconditioner changes the iterations, not the answer.
 module capacitance_preconditioner
-  use mpi_f08, only: MPI_Allreduce, MPI_IN_PLACE, MPI_SUM
+  use mpi_f08, only: MPI_Allreduce, MPI_IN_PLACE, MPI_SUM, MPI_MIN, MPI_INTEGER, MPI_Request, MPI_Irecv, MPI_Isend, &
+                     MPI_Waitall, MPI_STATUSES_IGNORE
   use agglo_kinds, only: wp
   use parallel_env, only: world, mpi_wp
   use fluid_grid, only: fluid_grid_t
@@ -26,6 +29,8 @@ module capacitance_preconditioner
   implicit none
   private
   public :: local_capacitance_t, local_capacitance_green, local_capacitance_assemble, local_capacitance_solve
+
+  integer, parameter :: tag_down = 450, tag_up = 460   !< messages to the rank below / above
 
   !> The window: at most 4 cells each way (the matrix's cost grows as its cube; at nu dt/dx^2 = 0.4
   !> the reduced solve takes 2 iterations with 4 cells, 3 with 3, 4 with 2 (docs/performance.md)),
@@ -39,18 +44,24 @@ module capacitance_preconditioner
     real(wp) :: alpha = -1                      !< the coefficient g was computed for
     integer :: reach(3) = 0                     !< the window: offsets kept per direction (cells)
     real(wp), allocatable :: green(:, :, :)     !< g(dx, dy, dz), |d_i| <= reach(i) at least
-    !> global index i + d (i in 1..n, |d| <= reach) wrapped into 1..n, in y and z (no modulo per entry)
-    integer, allocatable :: wrap_y(:), wrap_z(:)
-    !> this rank's ghost nodes by x-line (j, k): line_start(j + ny (k - 1)) .. line_start(next) - 1
-    !> index line_x (their i, ascending) and line_ghost (their ghost index)
-    integer, allocatable :: line_start(:), line_x(:), line_ghost(:)
+    !> global index j + d (j in 1..ny, |d| <= reach) wrapped into 1..ny (no modulo per entry)
+    integer, allocatable :: wrap_y(:)
+    !> The columns: this rank's ghost nodes (1..n_local), then the neighbours' within reach(3)
+    !> planes of the slab, from the rank below and from the rank above (more than one rank).
+    integer :: n_local = 0, n_below = 0, n_above = 0
+    integer, allocatable :: column_node(:, :)   !< (3, columns) i, j, k (k local, extended beyond the slab)
+    integer, allocatable :: send_down(:), send_up(:)   !< this rank's ghosts within reach of its bottom / top
+    real(wp), allocatable :: extended(:)        !< a vector over all columns (sparse_product)
+    !> the columns by x-line (j, k), k from 1 - reach(3) to nz_local + reach(3):
+    !> line_start(line) .. line_start(line + 1) - 1 index line_x (their i, ascending) and line_column
+    integer, allocatable :: line_start(:), line_x(:), line_column(:)
     integer, allocatable :: row_start(:)        !< (n_ghost + 1) compressed rows of C~
     integer, allocatable :: column(:)
     real(wp), allocatable :: entry(:)
     real(wp), allocatable :: diagonal(:)        !< C~'s diagonal (the inner right preconditioner)
-    real(wp), allocatable :: accumulated(:)     !< (n_ghost) one row of C~ while it is summed
+    real(wp), allocatable :: accumulated(:)     !< (columns) one row of C~ while it is summed
     integer, allocatable :: touched(:)          !< its columns so far
-    logical, allocatable :: listed(:)           !< (n_ghost) the column is in touched
+    logical, allocatable :: listed(:)           !< (columns) the column is in touched
     type(gmres_cycle_t) :: inner
     integer :: inner_total = 0                  !< inner iterations, summed (diagnostics)
   end type local_capacitance_t
@@ -66,7 +77,7 @@ contains
     type(fft_helmholtz_preconditioner_t), intent(inout) :: fft
     integer, intent(in) :: n_rows
     real(wp), allocatable :: delta(:), image(:)
-    integer :: extent(3), di, dj, dk, k, d, w
+    integer :: extent(3), di, dj, dk, k, d, w, thinnest(1)
     if (allocated(self%green) .and. fft%coefficient == self%alpha) return
     ! One offset beyond the largest window (to choose the window below), and no offset that
     ! wraps onto another across the periodic box.
@@ -100,8 +111,14 @@ contains
         end if
       end do
     end do
+    ! More than one rank: the planes in reach beyond a slab must be the adjacent slabs' (no slab
+    ! thinner than the window), and those below and above distinct planes.
+    if (grid%nz_local < grid%nz) then
+      thinnest(1) = min(grid%nz_local, (grid%nz - grid%nz_local) / 2)
+      call MPI_Allreduce(MPI_IN_PLACE, thinnest, 1, MPI_INTEGER, MPI_MIN, world)
+      self%reach(3) = max(0, min(self%reach(3), thinnest(1)))
+    end if
     call wrapped(grid%ny, self%reach(2), self%wrap_y)
-    call wrapped(grid%nz, self%reach(3), self%wrap_z)
   contains
     real(wp) function axis_value(direction, offset)
       integer, intent(in) :: direction, offset
@@ -121,7 +138,8 @@ contains
     end subroutine wrapped
   end subroutine local_capacitance_green
 
-  !> C~ on this rank's ghost nodes.
+  !> C~'s rows of this rank's ghost nodes (collective: the neighbours' ghost nodes within the
+  !> window are exchanged).
   subroutine local_capacitance_assemble(self, grid, nodes)
     type(local_capacitance_t), intent(inout) :: self
     type(fluid_grid_t), intent(in) :: grid
@@ -130,8 +148,8 @@ contains
     real(wp) :: coefficient
     integer :: node(3)
 
-    call prepare(self, nodes%n_ghost)
-    call sort_into_lines(self, grid, nodes)
+    call gather_columns(self, grid, nodes)
+    call sort_into_lines(self, grid)
     n_entries = 0
     self%accumulated = 0
     self%listed = .false.
@@ -163,9 +181,9 @@ contains
       if (.not. (abs(self%diagonal(g)) > 0.0_wp)) self%diagonal(g) = 1.0_wp
     end do
   contains
-    !> coefficient * g(x_a - x_H) into the row for every ghost node H of this rank within the window
-    !> of node a (global i, j, k): the x-lines of the window, and along each the ghost nodes
-    !> within reach of a (the window's x-range split where it wraps across the box).
+    !> coefficient * g(x_a - x_H) into the row for every column H within the window of node a
+    !> (global i, j, k): the x-lines of the window, and along each the nodes within reach of a
+    !> (the window's x-range split where it wraps across the box).
     subroutine add_term(a, coefficient)
       integer, intent(in) :: a(3)
       real(wp), intent(in) :: coefficient
@@ -173,10 +191,10 @@ contains
       lowest = a(1) - self%reach(1)
       highest = a(1) + self%reach(1)
       do dk = -self%reach(3), self%reach(3)
-        k = self%wrap_z(a(3) + dk) - grid%z_offset
-        if (k < 1 .or. k > grid%nz_local) cycle
+        k = extended_plane(grid, self%reach(3), a(3) + dk)
+        if (k < 1 - self%reach(3) .or. k > grid%nz_local + self%reach(3)) cycle
         do dj = -self%reach(2), self%reach(2)
-          line = self%wrap_y(a(2) + dj) + grid%ny * (k - 1)
+          line = line_index(grid, self%reach(3), self%wrap_y(a(2) + dj), k)
           if (self%line_start(line) == self%line_start(line + 1)) cycle
           if (lowest < 1) then
             call add_along_line(a, coefficient, line, -dj, -dk, lowest + grid%nx, grid%nx)
@@ -191,12 +209,12 @@ contains
       end do
     end subroutine add_term
 
-    !> The ghost nodes of x-line `line` with first <= i <= last (x_a - x_H = (-di, back_y, back_z)).
+    !> The columns of x-line `line` with first <= i <= last (x_a - x_H = (-di, back_y, back_z)).
     subroutine add_along_line(a, coefficient, line, back_y, back_z, first, last)
       integer, intent(in) :: a(3), line, back_y, back_z, first, last
       real(wp), intent(in) :: coefficient
       integer :: position, low, high, h, di
-      ! the first position with line_x >= first (bisection; the lists are short)
+      ! the first position with line_x >= first (bisection; the lines are short)
       low = self%line_start(line)
       high = self%line_start(line + 1)
       do while (low < high)
@@ -209,7 +227,7 @@ contains
       end do
       do position = low, self%line_start(line + 1) - 1
         if (self%line_x(position) > last) exit
-        h = self%line_ghost(position)
+        h = self%line_column(position)
         di = modulo(self%line_x(position) - a(1) + self%reach(1), grid%nx) - self%reach(1)
         if (.not. self%listed(h)) then
           n_touched = n_touched + 1
@@ -222,32 +240,107 @@ contains
     end subroutine add_along_line
   end subroutine local_capacitance_assemble
 
-  !> y ~ C~^{-1} r on this rank's ghost nodes: GMRES from y = 0 on C~ D^{-1} w = r, y = D^{-1} w,
-  !> to inner_tolerance or inner_iterations (rank-local: no communication).
-  subroutine local_capacitance_solve(self, r, y)
+  !> The plane of global index k (any integer, periodic) in this slab's extended local numbering:
+  !> 1..nz_local in the slab, below 1 / above nz_local for the planes just beyond it (out of
+  !> 1 - reach .. nz_local + reach when neither).
+  pure integer function extended_plane(grid, reach, k_global)
+    type(fluid_grid_t), intent(in) :: grid
+    integer, intent(in) :: reach, k_global
+    extended_plane = modulo(k_global - 1, grid%nz) + 1 - grid%z_offset
+    if (extended_plane < 1 - reach) extended_plane = extended_plane + grid%nz
+    if (extended_plane > grid%nz_local + reach) extended_plane = extended_plane - grid%nz
+  end function extended_plane
+
+  pure integer function line_index(grid, reach, j, k_extended)
+    type(fluid_grid_t), intent(in) :: grid
+    integer, intent(in) :: reach, j, k_extended
+    line_index = j + grid%ny * (k_extended + reach - 1)
+  end function line_index
+
+  !> The columns: this rank's ghost nodes, then those of the neighbouring slabs within reach(3)
+  !> planes (collective with the neighbours; one rank: none, the window wraps onto its own slab).
+  subroutine gather_columns(self, grid, nodes)
     type(local_capacitance_t), intent(inout) :: self
+    type(fluid_grid_t), intent(in) :: grid
+    type(component_nodes_t), intent(in) :: nodes
+    integer, allocatable :: down_nodes(:, :), up_nodes(:, :), from_below(:, :), from_above(:, :)
+    integer :: g, counts(2), n_columns, c
+    type(MPI_Request) :: requests(4)
+    self%n_local = nodes%n_ghost
+    self%n_below = 0
+    self%n_above = 0
+    self%send_down = pack([(g, g = 1, nodes%n_ghost)], [(nodes%ghost(g)%node(3) <= self%reach(3), g = 1, nodes%n_ghost)])
+    self%send_up = pack([(g, g = 1, nodes%n_ghost)], &
+                        [(nodes%ghost(g)%node(3) > grid%nz_local - self%reach(3), g = 1, nodes%n_ghost)])
+    if (grid%nz_local < grid%nz) then
+      ! the counts, then the nodes (i, j, global k)
+      call MPI_Irecv(counts(1), 1, MPI_INTEGER, grid%slab%rank_below, tag_up, world, requests(1))
+      call MPI_Irecv(counts(2), 1, MPI_INTEGER, grid%slab%rank_above, tag_down, world, requests(2))
+      call MPI_Isend(size(self%send_up), 1, MPI_INTEGER, grid%slab%rank_above, tag_up, world, requests(3))
+      call MPI_Isend(size(self%send_down), 1, MPI_INTEGER, grid%slab%rank_below, tag_down, world, requests(4))
+      call MPI_Waitall(4, requests, MPI_STATUSES_IGNORE)
+      self%n_below = counts(1)
+      self%n_above = counts(2)
+      down_nodes = global_nodes(self%send_down)
+      up_nodes = global_nodes(self%send_up)
+      allocate(from_below(3, self%n_below), from_above(3, self%n_above))
+      call MPI_Irecv(from_below, 3 * self%n_below, MPI_INTEGER, grid%slab%rank_below, tag_up, world, requests(1))
+      call MPI_Irecv(from_above, 3 * self%n_above, MPI_INTEGER, grid%slab%rank_above, tag_down, world, requests(2))
+      call MPI_Isend(up_nodes, 3 * size(self%send_up), MPI_INTEGER, grid%slab%rank_above, tag_up, world, requests(3))
+      call MPI_Isend(down_nodes, 3 * size(self%send_down), MPI_INTEGER, grid%slab%rank_below, tag_down, world, &
+                     requests(4))
+      call MPI_Waitall(4, requests, MPI_STATUSES_IGNORE)
+    end if
+    n_columns = self%n_local + self%n_below + self%n_above
+    call prepare(self, self%n_local, n_columns)
+    do g = 1, self%n_local
+      self%column_node(:, g) = nodes%ghost(g)%node
+    end do
+    do c = 1, self%n_below
+      self%column_node(:, self%n_local + c) = [from_below(1:2, c), &
+                                               extended_plane(grid, self%reach(3), from_below(3, c))]
+    end do
+    do c = 1, self%n_above
+      self%column_node(:, self%n_local + self%n_below + c) = [from_above(1:2, c), &
+                                                              extended_plane(grid, self%reach(3), from_above(3, c))]
+    end do
+  contains
+    function global_nodes(ghosts) result(list)
+      integer, intent(in) :: ghosts(:)
+      integer :: list(3, size(ghosts)), n
+      do n = 1, size(ghosts)
+        list(:, n) = nodes%ghost(ghosts(n))%node + [0, 0, grid%z_offset]
+      end do
+    end function global_nodes
+  end subroutine gather_columns
+
+  !> y ~ C~^{-1} r on the ghost nodes (this rank's entries; collective): GMRES from y = 0 on
+  !> C~ D^{-1} w = r, y = D^{-1} w, to inner_tolerance or inner_iterations.
+  subroutine local_capacitance_solve(self, grid, r, y)
+    type(local_capacitance_t), intent(inout) :: self
+    type(fluid_grid_t), intent(in) :: grid
     real(wp), intent(in) :: r(:)
     real(wp), intent(out) :: y(:)
-    real(wp) :: norm, estimate, coefficients(self%inner_iterations)
+    real(wp) :: norm(1), estimate, coefficients(self%inner_iterations)
     logical :: breakdown
-    integer :: j, n
-    n = size(r)
+    integer :: j
     y = 0
-    if (n == 0) return
-    norm = norm2(r)
-    if (.not. (norm > 0.0_wp)) return
-    call gmres_prepare(self%inner, n, self%inner_iterations, collective=.false.)
-    call gmres_begin(self%inner, r, norm)
+    norm(1) = sum(r**2)
+    call MPI_Allreduce(MPI_IN_PLACE, norm, 1, mpi_wp, MPI_SUM, world)
+    norm(1) = sqrt(norm(1))
+    if (.not. (norm(1) > 0.0_wp)) return
+    call gmres_prepare(self%inner, size(r), self%inner_iterations, collective=.true.)
+    call gmres_begin(self%inner, r, norm(1))
     j = 0
     do while (j < self%inner_iterations)
       j = j + 1
-      call sparse_product(self, self%inner%basis(:, j) / self%diagonal, self%inner%basis(:, j + 1))
+      call sparse_product(self, grid, self%inner%basis(:, j) / self%diagonal, self%inner%basis(:, j + 1))
       call gmres_orthogonalise(self%inner, j, estimate, breakdown)
       if (breakdown) then
         j = j - 1
         exit
       end if
-      if (estimate <= self%inner_tolerance * norm) exit
+      if (estimate <= self%inner_tolerance * norm(1)) exit
     end do
     self%inner_total = self%inner_total + j
     if (j == 0) return
@@ -255,71 +348,94 @@ contains
     y = matmul(self%inner%basis(:, 1:j), coefficients(1:j)) / self%diagonal
   end subroutine local_capacitance_solve
 
-  !> This rank's ghost nodes by x-line, ascending in i along each (a counting sort by line, then
-  !> insertion along the short lines).
-  subroutine sort_into_lines(self, grid, nodes)
+  !> The columns by x-line, ascending in i along each (a counting sort by line, then insertion
+  !> along the short lines).
+  subroutine sort_into_lines(self, grid)
     type(local_capacitance_t), intent(inout) :: self
     type(fluid_grid_t), intent(in) :: grid
-    type(component_nodes_t), intent(in) :: nodes
-    integer, allocatable :: next(:)
-    integer :: n_lines, g, line, position, i
-    n_lines = grid%ny * grid%nz_local
+    integer, allocatable :: next(:), line_of(:)
+    integer :: n_lines, n_columns, c, line, position, i
+    n_lines = grid%ny * (grid%nz_local + 2 * self%reach(3))
+    n_columns = size(self%column_node, 2)
     if (allocated(self%line_start)) then
       if (size(self%line_start) /= n_lines + 1) deallocate(self%line_start)
     end if
     if (.not. allocated(self%line_start)) allocate(self%line_start(n_lines + 1))
     if (allocated(self%line_x)) then
-      if (size(self%line_x) /= nodes%n_ghost) deallocate(self%line_x, self%line_ghost)
+      if (size(self%line_x) /= n_columns) deallocate(self%line_x, self%line_column)
     end if
-    if (.not. allocated(self%line_x)) allocate(self%line_x(nodes%n_ghost), self%line_ghost(nodes%n_ghost))
+    if (.not. allocated(self%line_x)) allocate(self%line_x(n_columns), self%line_column(n_columns))
+    line_of = [(line_index(grid, self%reach(3), self%column_node(2, c), self%column_node(3, c)), c = 1, n_columns)]
     ! counts in line_start(line + 1), then their prefix sums: the lines' first positions
     self%line_start = 0
-    do g = 1, nodes%n_ghost
-      line = nodes%ghost(g)%node(2) + grid%ny * (nodes%ghost(g)%node(3) - 1)
-      self%line_start(line + 1) = self%line_start(line + 1) + 1
+    do c = 1, n_columns
+      self%line_start(line_of(c) + 1) = self%line_start(line_of(c) + 1) + 1
     end do
     self%line_start(1) = 1
     do line = 1, n_lines
       self%line_start(line + 1) = self%line_start(line + 1) + self%line_start(line)
     end do
     next = self%line_start(1:n_lines)
-    do g = 1, nodes%n_ghost
-      line = nodes%ghost(g)%node(2) + grid%ny * (nodes%ghost(g)%node(3) - 1)
-      i = nodes%ghost(g)%node(1)
+    do c = 1, n_columns
+      line = line_of(c)
+      i = self%column_node(1, c)
       position = next(line)
       next(line) = position + 1
       do while (position > self%line_start(line))
         if (self%line_x(position - 1) <= i) exit
         self%line_x(position) = self%line_x(position - 1)
-        self%line_ghost(position) = self%line_ghost(position - 1)
+        self%line_column(position) = self%line_column(position - 1)
         position = position - 1
       end do
       self%line_x(position) = i
-      self%line_ghost(position) = g
+      self%line_column(position) = c
     end do
   end subroutine sort_into_lines
 
-  subroutine sparse_product(self, x, product)
-    type(local_capacitance_t), intent(in) :: self
+  !> C~ x on this rank's rows (collective: the neighbours' entries of x the rows reach are exchanged).
+  subroutine sparse_product(self, grid, x, product)
+    type(local_capacitance_t), intent(inout), asynchronous :: self
+    type(fluid_grid_t), intent(in) :: grid
     real(wp), intent(in) :: x(:)
     real(wp), intent(out) :: product(:)
-    integer :: g
-    do g = 1, size(x)
+    real(wp), allocatable, asynchronous :: down_values(:), up_values(:)
+    type(MPI_Request) :: requests(4)
+    integer :: g, first_above
+    self%extended(1:self%n_local) = x
+    if (grid%nz_local < grid%nz) then
+      down_values = x(self%send_down)
+      up_values = x(self%send_up)
+      first_above = self%n_local + self%n_below + 1
+      call MPI_Irecv(self%extended(self%n_local + 1:first_above - 1), self%n_below, mpi_wp, grid%slab%rank_below, &
+                     tag_up, world, requests(1))
+      call MPI_Irecv(self%extended(first_above:), self%n_above, mpi_wp, grid%slab%rank_above, tag_down, world, &
+                     requests(2))
+      call MPI_Isend(up_values, size(up_values), mpi_wp, grid%slab%rank_above, tag_up, world, requests(3))
+      call MPI_Isend(down_values, size(down_values), mpi_wp, grid%slab%rank_below, tag_down, world, requests(4))
+      call MPI_Waitall(4, requests, MPI_STATUSES_IGNORE)
+    end if
+    do g = 1, self%n_local
       product(g) = dot_product(self%entry(self%row_start(g):self%row_start(g + 1) - 1), &
-                               x(self%column(self%row_start(g):self%row_start(g + 1) - 1)))
+                               self%extended(self%column(self%row_start(g):self%row_start(g + 1) - 1)))
     end do
   end subroutine sparse_product
 
-  subroutine prepare(self, n_ghost)
+  !> Storage for n_rows rows (this rank's ghost nodes) and n_columns columns.
+  subroutine prepare(self, n_rows, n_columns)
     type(local_capacitance_t), intent(inout) :: self
-    integer, intent(in) :: n_ghost
+    integer, intent(in) :: n_rows, n_columns
     if (allocated(self%diagonal)) then
-      if (size(self%diagonal) /= n_ghost) deallocate(self%diagonal, self%row_start, self%accumulated, self%touched, &
-                                                     self%listed)
+      if (size(self%diagonal) /= n_rows) deallocate(self%diagonal, self%row_start)
     end if
-    if (.not. allocated(self%diagonal)) allocate(self%diagonal(n_ghost), self%row_start(n_ghost + 1), &
-                                                 self%accumulated(n_ghost), self%touched(n_ghost), self%listed(n_ghost))
-    if (.not. allocated(self%column)) allocate(self%column(max(1, 64 * n_ghost)), self%entry(max(1, 64 * n_ghost)))
+    if (.not. allocated(self%diagonal)) allocate(self%diagonal(n_rows), self%row_start(n_rows + 1))
+    if (allocated(self%accumulated)) then
+      if (size(self%accumulated) /= n_columns) deallocate(self%accumulated, self%touched, self%listed, &
+                                                          self%column_node, self%extended)
+    end if
+    if (.not. allocated(self%accumulated)) allocate(self%accumulated(n_columns), self%touched(n_columns), &
+                                                    self%listed(n_columns), self%column_node(3, n_columns), &
+                                                    self%extended(n_columns))
+    if (.not. allocated(self%column)) allocate(self%column(max(1, 64 * n_rows)), self%entry(max(1, 64 * n_rows)))
     self%row_start(1) = 1
   end subroutine prepare
 

@@ -50,7 +50,7 @@ module immersed_capacitance
   type :: capacitance_result_t
     logical :: converged = .false.
     integer :: iterations = 0          !< GMRES iterations (one FFT solve each)
-    integer :: inner_iterations = 0    !< GMRES iterations of the preconditioner's solves (no FFT), this rank
+    integer :: inner_iterations = 0    !< GMRES iterations of the preconditioner's solves (no FFT)
     integer :: fft_solves = 0          !< all FFT Helmholtz solves (iterations + one per outer cycle)
     real(wp) :: relative_residual = huge(1.0_wp)   !< ||b - A u||_2 / ||b||_2, the true one
   end type capacitance_result_t
@@ -127,7 +127,7 @@ contains
         j = j + 1
         result%iterations = result%iterations + 1
         call timer_tic('  capacitance solves')
-        call local_capacitance_solve(work%preconditioner, work%krylov%basis(:, j), work%preconditioned(:, j))
+        call local_capacitance_solve(work%preconditioner, grid, work%krylov%basis(:, j), work%preconditioned(:, j))
         call timer_toc('  capacitance solves')
         work%forcing(ghost_rows) = work%preconditioned(:, j)
         if (size(work%images, 2) < j) call grow_images(work, j)

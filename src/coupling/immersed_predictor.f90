@@ -103,7 +103,7 @@ module immersed_predictor
     integer :: updates = 0                            !< of those (per component), values only (same structure)
     integer :: full_builds = 0                        !< component matrices built with a new pattern
     integer :: fft_solves = 0                         !< FFT Helmholtz solves of the capacitance method, summed
-    integer :: preconditioner_iterations = 0          !< its preconditioner's GMRES iterations (rank 0's), summed
+    integer :: preconditioner_iterations = 0          !< its preconditioner's GMRES iterations, summed
   contains
     procedure :: solve => immersed_predictor_solve
   end type immersed_predictor_t

@@ -382,7 +382,7 @@ contains
           'FFT Helmholtz solve, body rows listed '//int_text(scene%predictor%builds)//' times in '// &
           real_text(scene%predictor%build_seconds)//' s, FFT solves '//int_text(scene%predictor%fft_solves)// &
           ' (local capacitance preconditioner: '//int_text(scene%predictor%preconditioner_iterations)// &
-          ' GMRES iterations on rank 0), solves '//real_text(scene%predictor%solve_seconds)// &
+          ' GMRES iterations), solves '//real_text(scene%predictor%solve_seconds)// &
           ' s; last step GMRES iterations '//int_text(scene%predicted%sweeps)//', relative residual '// &
           real_text(scene%predicted%residual)//', slip '//real_text(scene%projected%largest_change)// &
           ', cut-cell divergence '//real_text(scene%divergence)//' 1/s')
