@@ -21,7 +21,7 @@ forcing_exe=$BUILD/bench/bench_forcing
 stages_exe=$BUILD/bench/bench_stages
 immersed_exe=$BUILD/bench/bench_immersed
 agglo=$BUILD/agglo
-parts=${BENCH_PARTS:-fluid stages pair forcing immersed point}   # e.g. BENCH_PARTS=pair make bench
+parts=${BENCH_PARTS:-fluid stages pair forcing immersed point cn}   # e.g. BENCH_PARTS=pair make bench
 echo "Agglo fluid benchmark on $(nproc) cores: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')"
 echo "compiler: $(mpifort --version | head -n 1); flags: $(cat "$BUILD/flags.txt" 2>/dev/null); FFTW_ESTIMATE plans"
 if [[ $parts == *fluid* ]]; then
@@ -141,6 +141,43 @@ if [[ $parts == *point* ]]; then
                                  sxy[k] += x * y; m[k]++ }
        END { for (k in m) printf "  fitted exponent of the particle work against N, %d rank(s): %.2f\n", k,
                                   (m[k] * sxy[k] - sx[k] * sy[k]) / (m[k] * sxx[k] - sx[k] * sx[k]) }' "$work/point_rows.txt"
+fi
+
+# Crank-Nicolson with two resolved bodies at 128^3 on 2 ranks (docs/performance.md): the needle pair
+# of input/quiescent_needle_resolved.nml at 128^3, 5 steps at dt = 1e-5 s (4.8 times the explicit
+# step, nu dt/dx^2 = 0.4), against 6 explicit steps at 2e-6 s; then the sphere pair of
+# input/chaotic_sphere_resolved.nml at 5 times its explicit step when its forced field exists.
+# Three alternated rounds; each run's median step of steps 2-5 (the first holds the FFT plans).
+if [[ $parts == *cn* ]]; then
+  echo
+  echo "Crank-Nicolson with two bodies, 128^3, 2 ranks: case  round  CN_ms  explicit_ms  ratio  FFT_solves/step  outer_iterations"
+  median_step() { awk '/^step [2-9] /{print $(NF-3)}' "$1" | sort -g | awk '{v[NR]=$1} END{print v[int((NR+1)/2)]}'; }
+  needle=$PWD/input/quiescent_needle_resolved.nml
+  sphere=$PWD/input/chaotic_sphere_resolved.nml
+  cases=(needle)
+  field=$(awk -F"'" '/^ *init_file *=/{print $2}' "$sphere")
+  if [[ -f $field ]]; then cases+=(sphere); else echo "  (spheres skipped: no forced field $field)"; fi
+  for round in 1 2 3; do
+    for case in "${cases[@]}"; do
+      if [[ $case == needle ]]; then
+        deck=$needle; common=(--set grid.nx=128 --set grid.ny=128 --set grid.nz=128)
+        cn=(--set run.dt=1e-5 --set run.end_time=5e-5); explicit=(--set run.dt=2e-6 --set run.end_time=1.2e-5)
+      else
+        deck=$sphere; common=(--set "fluid.init_file='$PWD/$field'")
+        cn=(--set run.dt=2.4e-5 --set scene.particle_substeps=120 --set run.end_time=1.2e-4)
+        explicit=(--set run.end_time=2.88e-5)
+      fi
+      (cd "$work" && mpirun -np 2 "$agglo" "$deck" "${common[@]}" --set run.progress_interval=1 \
+         --set "fluid.viscous_scheme='crank_nicolson'" "${cn[@]}" --set "run.name='cn_${case}_$round'") > "$work/cn.log" 2>&1
+      (cd "$work" && mpirun -np 2 "$agglo" "$deck" "${common[@]}" --set run.progress_interval=1 "${explicit[@]}" \
+         --set "run.name='explicit_${case}_$round'") > "$work/explicit.log" 2>&1
+      cn_ms=$(median_step "$work/cn.log"); explicit_ms=$(median_step "$work/explicit.log")
+      solves=$(grep -o 'FFT solves [0-9]*' "$work/cn.log" | head -n 1 | awk '{print $3 / 5}')
+      outer=$(grep -o 'last step GMRES iterations [0-9]*' "$work/cn.log" | head -n 1 | awk '{print $5}')
+      awk -v c=$case -v r=$round -v a="$cn_ms" -v b="$explicit_ms" -v f="$solves" -v o="$outer" \
+        'BEGIN { printf "  %-8s %5d %8.1f %10.1f %7.2f %10.1f %12s\n", c, r, a, b, a / b, f, o }'
+    done
+  done
 fi
 
 [[ $parts == *pair* ]] || exit 0
