@@ -1,5 +1,5 @@
 !> A sparse approximation of the capacitance matrix C = A_G H^{-1} P_G^T (immersed_capacitance),
-!> solved approximately on each rank as the preconditioner of the reduced system's GMRES.
+!> solved approximately as the preconditioner of the reduced system's GMRES.
 !>
 !> H = I - alpha L_h on the periodic grid is translation invariant, so H^{-1} P_G^T z is the
 !> superposition of one discrete Green's function g = H^{-1} e_0 placed at the ghost nodes, and
@@ -13,7 +13,8 @@
 !> with C formed explicitly, here truncated. Each rank holds the rows of its ghost nodes; their
 !> columns include the neighbouring slabs' ghost nodes within the window (their nodes exchanged
 !> once per assembly, their values once per product), so C~ does not depend on the rank count
-!> and bodies across a slab boundary keep their couplings. Its system is solved by a few GMRES
+!> (unless a slab is thinner than the window, which then narrows in z) and bodies across a slab
+!> boundary keep their couplings. Its system is solved by a few GMRES
 !> iterations (collective) with C~'s diagonal as right preconditioner.
 !> The outer GMRES is flexible (the inner solve is not a fixed linear map), and its stopping rule
 !> is on the true residual: the preconditioner changes the iterations, not the answer.
@@ -33,7 +34,8 @@ module capacitance_preconditioner
   integer, parameter :: tag_down = 450, tag_up = 460   !< messages to the rank below / above
 
   !> The window: at most 4 cells each way (the matrix's cost grows as its cube; at nu dt/dx^2 = 0.4
-  !> the reduced solve takes 2 iterations with 4 cells, 3 with 3, 4 with 2 (docs/performance.md)),
+  !> the reduced solve takes 2 iterations with 4 cells, 2-3 with 3, 3 with 2:
+  !> docs/studies/performance.md, "The local capacitance preconditioner"),
   !> and no wider than g needs: the offsets along an axis beyond it hold less than 1e-4 of g(0).
   integer, parameter :: largest_window = 4
   real(wp), parameter :: window_cutoff = 1.0e-4_wp
@@ -263,8 +265,9 @@ contains
     type(local_capacitance_t), intent(inout) :: self
     type(fluid_grid_t), intent(in) :: grid
     type(component_nodes_t), intent(in) :: nodes
-    integer, allocatable :: down_nodes(:, :), up_nodes(:, :), from_below(:, :), from_above(:, :)
-    integer :: g, counts(2), n_columns, c
+    integer, allocatable, asynchronous :: down_nodes(:, :), up_nodes(:, :), from_below(:, :), from_above(:, :)
+    integer, asynchronous :: counts(2), sizes(2)   ! received (below, above) and sent (up, down)
+    integer :: g, n_columns, c
     type(MPI_Request) :: requests(4)
     self%n_local = nodes%n_ghost
     self%n_below = 0
@@ -276,8 +279,9 @@ contains
       ! the counts, then the nodes (i, j, global k)
       call MPI_Irecv(counts(1), 1, MPI_INTEGER, grid%slab%rank_below, tag_up, world, requests(1))
       call MPI_Irecv(counts(2), 1, MPI_INTEGER, grid%slab%rank_above, tag_down, world, requests(2))
-      call MPI_Isend(size(self%send_up), 1, MPI_INTEGER, grid%slab%rank_above, tag_up, world, requests(3))
-      call MPI_Isend(size(self%send_down), 1, MPI_INTEGER, grid%slab%rank_below, tag_down, world, requests(4))
+      sizes = [size(self%send_up), size(self%send_down)]
+      call MPI_Isend(sizes(1), 1, MPI_INTEGER, grid%slab%rank_above, tag_up, world, requests(3))
+      call MPI_Isend(sizes(2), 1, MPI_INTEGER, grid%slab%rank_below, tag_down, world, requests(4))
       call MPI_Waitall(4, requests, MPI_STATUSES_IGNORE)
       self%n_below = counts(1)
       self%n_above = counts(2)
