@@ -1,8 +1,8 @@
 !> The Crank-Nicolson predictor's system with the immersed-boundary rows, A u = b, solved on the
 !> ghost rows only: a capacitance-matrix formulation (Buzbee, Dorr, George & Golub 1971, SIAM J.
 !> Numer. Anal. 8, 722; Proskurowski & Widlund 1976) with flexible GMRES (Saad 1993; gmres_cycle)
-!> on the reduced system, preconditioned by a sparse approximation of its matrix solved on each
-!> rank (capacitance_preconditioner) (docs/theory.md, "Linear solver (hypre)";
+!> on the reduced system, preconditioned by an approximate solve with a sparse approximation of
+!> its matrix (capacitance_preconditioner) (docs/theory.md, "Linear solver (hypre)";
 !> docs/studies/performance.md).
 !>
 !> A differs from the periodic Helmholtz operator H = I - alpha L_h (which the FFT inverts exactly)
