@@ -30,6 +30,7 @@ module capacitance_preconditioner
   implicit none
   private
   public :: local_capacitance_t, local_capacitance_green, local_capacitance_assemble, local_capacitance_solve
+  public :: extended_plane
 
   integer, parameter :: tag_down = 450, tag_up = 460   !< messages to the rank below / above
 

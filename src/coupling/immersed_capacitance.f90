@@ -31,7 +31,7 @@ module immersed_capacitance
   use timer_registry, only: timer_tic, timer_toc
   use gmres_cycle, only: gmres_cycle_t, gmres_prepare, gmres_begin, gmres_orthogonalise, gmres_coefficients
   use capacitance_preconditioner, only: local_capacitance_t, local_capacitance_green, local_capacitance_assemble, &
-                                        local_capacitance_solve
+                                        local_capacitance_solve, extended_plane
   implicit none
   private
   public :: capacitance_work_t, capacitance_result_t, capacitance_solve, capacitance_first_guess
@@ -224,9 +224,7 @@ contains
     integer, intent(in) :: halo, i, j, k_global
     real(wp), intent(in) :: values(:)
     integer :: k
-    k = modulo(k_global - 1, grid%nz) + 1 - grid%z_offset
-    if (k < 1 - halo) k = k + grid%nz
-    if (k > grid%nz_local + halo) k = k - grid%nz
+    k = extended_plane(grid, halo, k_global)
     if (k < 1) then
       value_at = work%below(i, j, k + halo)
     else if (k > grid%nz_local) then
