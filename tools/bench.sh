@@ -66,8 +66,8 @@ fi
 # every step; explicit diffusion): the coupled step against the fluid-only step (target <= 1.3x,
 # docs/studies/performance.md), by part, for both couplings, 1 and 2 ranks; then against the number of
 # bodies (needles and disks at 128^3; spheres of D/dx = 10 at 64^3; N = 1..128 needles, disks and spheres
-# at 128^3 with the immersed boundary per body and the exponent of its fit) and against the mesh level of the
-# ghost-node geometry. Medians over 10 (128^3) or 20 (64^3) repetitions, slowest rank; on 1 rank the process's
+# at 128^3 with the immersed boundary per body and the exponent of its fit), against the mesh level of the
+# ghost-node geometry, and in a dense suspension of 256 bodies. Medians over 10 (128^3) or 20 (64^3) repetitions, slowest rank; on 1 rank the process's
 # CPU time (robust on a shared machine), on 2 ranks the wall time.
 if [[ $parts == *immersed* ]]; then
   echo
@@ -99,6 +99,19 @@ if [[ $parts == *immersed* ]]; then
   done
   for level in 1 2 3; do   # the ghost nodes on the icosphere (&bodies geometry = 'mesh')
     (cd "$work" && mpirun -np 1 "$immersed_exe" 128 10 2 implicit cpu $level)
+  done
+  # A dense suspension: input/suspension_<shape>_resolved.nml with 256 bodies (13.4% by volume, placed
+  # 2 um apart: fallback rows and slowly converging ghost rows in the gaps), from a random field, 15
+  # steps on 1 rank; the run's own stage timers (ms per step, means over the steps).
+  echo "Dense suspension (128^3, 256 bodies, 1 rank; ms per step): shape  step  particles  IB  classification  imposition  sweeps"
+  for shape in needle disk sphere; do
+    deck=$PWD/input/suspension_${shape}_resolved.nml
+    (cd "$work" && mpirun -np 1 "$agglo" "$deck" --set suspension.count=256 \
+       --set "fluid.init='random'" --set fluid.init_amplitude=0.01 --set run.end_time=7.2e-5 \
+       --set output.field_interval=0.0 --set "run.name='dense_$shape'") > "$work/dense.log" 2>&1
+    awk -v s=$shape '/^  fluid step /{f=$5} /^  particle sub-steps /{p=$5} /^  immersed boundary /{ib=$5}
+      /^    IB classification /{c=$5} /^    IB imposition /{i=$5} /immersed boundary: sweeps/{w=$4; sub(",", "", w)}
+      END { printf "  %-7s %9.1f %9.1f %9.1f %9.1f %9.1f %6s\n", s, f + p, p, ib, c, i, w }' "$work/dense.log"
   done
 fi
 

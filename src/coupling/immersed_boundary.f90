@@ -54,7 +54,19 @@ module immersed_boundary
     !> sweep, then only the corners at ghost nodes (the others keep their values through the sweeps)
     real(wp), allocatable :: values(:, :)
     integer :: n_moving = 0                     !< the corners at ghost nodes
-    integer, allocatable :: moving(:, :)        !< (2, n_moving) corner and row of each
+    !> (2, n_moving) corner and row of each, grouped by the local ghost row they read (reader_start),
+    !> then those read from the copied planes (or without a row of this rank), re-read every sweep
+    integer, allocatable :: moving(:, :)
+    !> (n_ghost + 1) moving(:, reader_start(r) : reader_start(r + 1) - 1) read ghost row r of this
+    !> rank; moving(:, reader_start(n_ghost + 1) : n_moving) the others
+    integer, allocatable :: reader_start(:)
+    !> (n_ghost) the rows whose value changed in the last sweep: changed(1:n_changed). A row none of
+    !> whose ghost corners changed would give the same value again, so a sweep after the first
+    !> evaluates only the readers of these rows (and of the copied planes' values that changed).
+    integer :: n_changed = 0
+    integer, allocatable :: changed(:)
+    integer, allocatable :: active(:)           !< (n_ghost) scratch: the rows a sweep evaluates
+    logical, allocatable :: is_active(:)        !< (n_ghost) scratch: row in active(:), false between sweeps
     real(wp), allocatable :: kappa(:)           !< (n_ghost) the records' extrapolation
     real(wp), allocatable :: self_weight(:)     !< (n_ghost) the weight of G's own corner (0 if none)
   end type ghost_rows_t

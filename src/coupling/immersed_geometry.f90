@@ -30,10 +30,12 @@
 !>   rows times its chords, not with its bounding box;
 !> - the ghost and interior lists are gathered plane by plane and row by row from the rows' runs
 !>   (the union of a row's runs in ascending index: storage order, as a sweep of the whole slab would);
-!> - the fallback test of a ghost tries only the bodies whose bounding sphere lies within reach of
-!>   its own: |c_m - c_n| <= R_n + R_m + (1 + max(1, image_cells)) h_max (R = max(a, b)); any other
-!>   body is rejected by the segment test's own bounding-sphere check, since |B - c_n| <= R_n and
-!>   the segment is at most max(1, image_cells) h_max long;
+!> - the fallback test of a ghost tries only the bodies whose bounding sphere comes within reach r
+!>   of its body: |c_m - c_n| <= R_n + R_m + r and the distance from c_m to the (analytic) solid n
+!>   at most R_m + r, r = (1 + max(1, image_cells)) h_max, R = max(a, b); any other body is rejected
+!>   by the segment test's own bounding-sphere check, since the segment starts at B in the solid n
+!>   (on the analytic surface, or on a mesh inscribed in it) and is at most r - h_max long. The
+!>   second test matters for elongated bodies, whose bounding spheres overlap many neighbours';
 !> - the closest point is the Newton iteration of spheroid_distance (about 5 evaluations for a ghost
 !>   node within a cell of the surface).
 !>
@@ -202,10 +204,6 @@ contains
     allocate(near_x(grid%nx), near_y(grid%ny), near_z(k_lo - 1:k_hi + 1))
     call mark_solid_nodes(grid, bodies, options, component, work, near_x, near_y, near_z)
 
-    ! The indices within some box, ascending (the loops below keep the storage order).
-    list_x = pack([(i, i = 1, grid%nx)], near_x)
-    list_y = pack([(j, j = 1, grid%ny)], near_y)
-    list_z = pack([(k, k = k_lo, k_hi)], near_z(k_lo:k_hi))
     associate (owner => work%owner, status => work%status)
       ! status is node_fluid everywhere on entry (work's invariant); solid nodes only in the runs,
       ! each visited once, in its owner's run. The counts are of this rank's planes.
@@ -270,7 +268,10 @@ contains
           end do
         end do
       else
-        ! Every node of the union of the boxes' index sets (the reference).
+        ! Every node of the union of the boxes' index sets (the reference), in storage order.
+        list_x = pack([(i, i = 1, grid%nx)], near_x)
+        list_y = pack([(j, j = 1, grid%ny)], near_y)
+        list_z = pack([(k, k = k_lo, k_hi)], near_z(k_lo:k_hi))
         do kk = 1, size(list_z)
           k = list_z(kk)
           if (k < 1 .or. k > grid%nz_local) cycle
@@ -347,13 +348,14 @@ contains
 
   !> For each body n, the other bodies its ghosts' fallback test must try (candidates(1:count(n), n),
   !> ascending): with options%band only those whose bounding sphere can meet an image segment from
-  !> n's surface (the module header), else all of them.
+  !> n's surface (the module header: two bounding spheres, then m's against the solid n), else all.
   subroutine fallback_candidates(grid, bodies, options, candidates, counts)
     type(fluid_grid_t), intent(in) :: grid
     type(immersed_body_t), intent(in) :: bodies(:)
     type(immersed_options_t), intent(in) :: options
     integer, allocatable, intent(out) :: candidates(:, :), counts(:)
-    real(wp) :: box(3), h_max, reach, radius(size(bodies))
+    real(wp) :: box(3), h_max, reach, radius(size(bodies)), separation(3)
+    type(surface_projection_t) :: projection
     integer :: n, m
     box = [grid%lx, grid%ly, grid%lz]
     h_max = max(grid%dx, grid%dy, grid%dz)
@@ -367,7 +369,10 @@ contains
       do m = 1, size(bodies)
         if (m == n) cycle
         if (options%band) then
-          if (norm2(minimum_image(bodies(m)%centre - bodies(n)%centre, box)) > radius(n) + radius(m) + reach) cycle
+          separation = minimum_image(bodies(m)%centre - bodies(n)%centre, box)
+          if (norm2(separation) > radius(n) + radius(m) + reach) cycle
+          projection = body_closest_point(bodies(n)%shape, rotate_to_body(bodies(n)%orientation, separation))
+          if (projection%signed_distance > radius(m) + reach) cycle
         end if
         counts(n) = counts(n) + 1
         candidates(counts(n), n) = m

@@ -190,16 +190,42 @@ contains
     type(fluid_grid_t), intent(in) :: grid
     integer, intent(in) :: component
     integer :: g, corner, k, n_ghost, stride_j, stride_k, plane_size, k_low
+    integer, allocatable :: next(:)   ! (0:n_ghost) the next place of a moving corner that reads row r (0: the others)
     associate (nodes => ibm%geometry%component(component), rows => ibm%rows(component))
       n_ghost = nodes%n_ghost
       if (allocated(rows%node)) then
         if (size(rows%node) < n_ghost) deallocate(rows%node, rows%source, rows%weight, rows%values, rows%kappa, &
-                                                  rows%self_weight, rows%moving)
+                                                  rows%self_weight, rows%moving, rows%reader_start, rows%changed, &
+                                                  rows%active, rows%is_active)
       end if
-      if (.not. allocated(rows%node)) allocate(rows%node(size(nodes%ghost)), rows%source(8, size(nodes%ghost)), &
+      if (.not. allocated(rows%node)) then
+        allocate(rows%node(size(nodes%ghost)), rows%source(8, size(nodes%ghost)), &
           rows%weight(8, size(nodes%ghost)), rows%values(8, size(nodes%ghost)), rows%kappa(size(nodes%ghost)), &
-          rows%self_weight(size(nodes%ghost)), rows%moving(2, 8 * size(nodes%ghost)))
-      rows%n_moving = 0
+          rows%self_weight(size(nodes%ghost)), rows%moving(2, 8 * size(nodes%ghost)), &
+          rows%reader_start(size(nodes%ghost) + 1), rows%changed(size(nodes%ghost)), &
+          rows%active(size(nodes%ghost)), rows%is_active(size(nodes%ghost)))
+        rows%is_active = .false.
+      end if
+      rows%n_changed = 0
+      ! The moving corners grouped by the row they read: counted (next(r), r = 0 for the others),
+      ! then placed in the second loop below.
+      allocate(next(0:n_ghost))
+      next = 0
+      do g = 1, n_ghost
+        associate (ghost => nodes%ghost(g))
+          do corner = 1, 8
+            if (corner == ghost%self_corner .or. ghost%stencil_status(corner) /= node_ghost) cycle
+            next(ghost%stencil_ghost(corner)) = next(ghost%stencil_ghost(corner)) + 1
+          end do
+        end associate
+      end do
+      rows%reader_start(1) = 1
+      do k = 1, n_ghost
+        rows%reader_start(k + 1) = rows%reader_start(k) + next(k)
+      end do
+      rows%n_moving = rows%reader_start(n_ghost + 1) - 1 + next(0)
+      next(1:n_ghost) = rows%reader_start(1:n_ghost)
+      next(0) = rows%reader_start(n_ghost + 1)
       ! The field's layout (0:nx+1, 0:ny+1, 0:nz_local+1) and the planes' (0:nx+1, 0:ny+1, halo planes).
       stride_j = grid%nx + 2
       stride_k = stride_j * (grid%ny + 2)
@@ -223,8 +249,8 @@ contains
             end if
             ! A ghost node (of this rank or, in the copied planes, of a neighbour) changes in the sweeps.
             if (ghost%stencil_status(corner) == node_ghost) then
-              rows%n_moving = rows%n_moving + 1
-              rows%moving(:, rows%n_moving) = [corner, g]
+              rows%moving(:, next(ghost%stencil_ghost(corner))) = [corner, g]
+              next(ghost%stencil_ghost(corner)) = next(ghost%stencil_ghost(corner)) + 1
             end if
             ! The corner's local plane, continued beyond the slab (lower corner + bit).
             k = ghost%node(3) + ghost%lower_offset(3) + (corner - 1) / 4
@@ -251,7 +277,10 @@ contains
 
   !> One Jacobi sweep of the ghost rows of one component: every new value from the values before
   !> the sweep; `limit` takes the largest change. The first sweep of an imposition reads every
-  !> stencil value; the later ones only those at ghost nodes (the rest do not change in the sweeps).
+  !> stencil value and evaluates every row; a later one re-reads only the ghost corners whose value
+  !> changed in the sweep before and evaluates only the rows that read them: a row whose inputs did
+  !> not change would give its value again to the bit, so the sweeps, their count and every value
+  !> are those of evaluating every row every sweep.
   subroutine jacobi_sweep(ibm, component, field, surface, first, limit)
     type(immersed_boundary_t), intent(inout) :: ibm
     integer, intent(in) :: component
@@ -273,8 +302,8 @@ contains
 
   !> The sweep of jacobi_sweep on the packed rows, with the field and the component's copied planes
   !> seen flattened (the layouts of pack_rows): the stencil values are gathered into rows%values
-  !> (all of them when `first`, else those at ghost nodes), then each row is evaluated from them in
-  !> the order of its corners, as from the field.
+  !> (all of them when `first`, else the ghost corners whose value changed), then each row to
+  !> evaluate is evaluated from them in the order of its corners, as from the field.
   subroutine sweep_rows(rows, n_ghost, field, below, above, plane_size, surface, first, limit)
     type(ghost_rows_t), intent(inout) :: rows
     integer, intent(in) :: n_ghost, plane_size   !< plane_size: the values in below (and in above)
@@ -284,36 +313,80 @@ contains
     logical, intent(in) :: first
     real(wp), intent(inout) :: limit
     real(wp), allocatable :: updated(:)
-    real(wp) :: neighbours
-    integer :: g, corner, m
-    allocate(updated(n_ghost))
+    real(wp) :: neighbours, value
+    integer :: g, corner, m, i, r, n_active
     if (first) then
       do g = 1, n_ghost
         do corner = 1, 8
           if (rows%source(corner, g) /= 0) rows%values(corner, g) = source_value(rows%source(corner, g))
         end do
+        rows%active(g) = g
       end do
+      n_active = n_ghost
     else
-      do m = 1, rows%n_moving
+      n_active = 0
+      do i = 1, rows%n_changed
+        r = rows%changed(i)
+        do m = rows%reader_start(r), rows%reader_start(r + 1) - 1
+          associate (corner => rows%moving(1, m), g => rows%moving(2, m))
+            rows%values(corner, g) = field(rows%node(r))
+            call activate(g)
+          end associate
+        end do
+      end do
+      ! The copied planes (and ghost nodes without a row here) change outside this rank's sweep:
+      ! compared as stored, bit for bit.
+      do m = rows%reader_start(n_ghost + 1), rows%n_moving
         associate (corner => rows%moving(1, m), g => rows%moving(2, m))
-          rows%values(corner, g) = source_value(rows%source(corner, g))
+          value = source_value(rows%source(corner, g))
+          if (value /= rows%values(corner, g) .or. value /= value) then
+            rows%values(corner, g) = value
+            call activate(g)
+          end if
         end associate
       end do
+      ! Many rows: evaluated in storage order (the rows' arrays streamed, not gathered).
+      if (8 * n_active > n_ghost) then
+        n_active = 0
+        do g = 1, n_ghost
+          if (.not. rows%is_active(g)) cycle
+          n_active = n_active + 1
+          rows%active(n_active) = g
+        end do
+      end if
+      rows%is_active(rows%active(1:n_active)) = .false.
     end if
-    do g = 1, n_ghost
+    allocate(updated(n_active))
+    do i = 1, n_active
+      g = rows%active(i)
       neighbours = 0
       do corner = 1, 8
         if (rows%source(corner, g) == 0) cycle
         neighbours = neighbours + rows%weight(corner, g) * rows%values(corner, g)
       end do
-      updated(g) = ((1.0_wp + rows%kappa(g)) * surface(g) - rows%kappa(g) * neighbours) / &
+      updated(i) = ((1.0_wp + rows%kappa(g)) * surface(g) - rows%kappa(g) * neighbours) / &
                    (1.0_wp + rows%kappa(g) * rows%self_weight(g))
     end do
-    do g = 1, n_ghost
-      limit = max(limit, abs(updated(g) - field(rows%node(g))))
-      field(rows%node(g)) = updated(g)
+    rows%n_changed = 0
+    do i = 1, n_active
+      g = rows%active(i)
+      limit = max(limit, abs(updated(i) - field(rows%node(g))))
+      if (updated(i) /= field(rows%node(g)) .or. updated(i) /= updated(i)) then
+        rows%n_changed = rows%n_changed + 1
+        rows%changed(rows%n_changed) = g
+      end if
+      field(rows%node(g)) = updated(i)
     end do
   contains
+    !> Mark row g for evaluation in this sweep.
+    subroutine activate(g)
+      integer, intent(in) :: g
+      if (rows%is_active(g)) return
+      rows%is_active(g) = .true.
+      n_active = n_active + 1
+      rows%active(n_active) = g
+    end subroutine activate
+
     !> The value at a packed source position (> 0 field, < 0 planes: below, then above).
     real(wp) function source_value(source) result(value)
       integer, intent(in) :: source
