@@ -51,7 +51,7 @@ module immersed_boundary
     integer, allocatable :: source(:, :)
     real(wp), allocatable :: weight(:, :)       !< (8, n_ghost) trilinear weights, as in the records
     !> (8, n_ghost) the stencil values, gathered by the sweeps: all of them at an imposition's first
-    !> sweep, then only the corners at ghost nodes (the others keep their values through the sweeps)
+    !> sweep, then only the corners at ghost nodes whose value changed (the others keep their values)
     real(wp), allocatable :: values(:, :)
     integer :: n_moving = 0                     !< the corners at ghost nodes
     !> (2, n_moving) corner and row of each, grouped by the local ghost row they read (reader_start),
