@@ -118,11 +118,15 @@ contains
     type(immersed_options_t), intent(in) :: options
     type(immersed_geometry_t), intent(inout) :: geometry
     integer :: component
+    integer, allocatable :: candidates(:, :), n_candidates(:)
     call check_inputs(grid, bodies, options)
     geometry%n_bodies = size(bodies)
     geometry%classifications = geometry%classifications + 1
+    ! The bodies each body's fallback test tries: the same for the three components.
+    call fallback_candidates(grid, bodies, options, candidates, n_candidates)
     do component = 1, 3
-      call classify_component(grid, bodies, options, component, geometry%work, geometry%component(component))
+      call classify_component(grid, bodies, options, component, candidates, n_candidates, geometry%work, &
+                              geometry%component(component))
     end do
   end subroutine classify_nodes
 
@@ -169,11 +173,12 @@ contains
     end do
   end function lab_half_extent
 
-  subroutine classify_component(grid, bodies, options, component, work, nodes)
+  subroutine classify_component(grid, bodies, options, component, candidates, n_candidates, work, nodes)
     type(fluid_grid_t), intent(in) :: grid
     type(immersed_body_t), intent(in) :: bodies(:)
     type(immersed_options_t), intent(in) :: options
     integer, intent(in) :: component
+    integer, intent(in) :: candidates(:, :), n_candidates(:)   !< fallback_candidates
     type(classification_work_t), intent(inout) :: work
     type(component_nodes_t), intent(inout) :: nodes
     integer, allocatable :: list_x(:), list_y(:), list_z(:)
@@ -181,7 +186,6 @@ contains
     integer :: reach, k_lo, k_hi, i, j, k, ii, jj, kk, n_ghost, n_interior, g, n, n_row, r, p
     integer :: row_indices(grid%nx), i_below(grid%nx), i_above(grid%nx)
     integer :: j_below(grid%ny), j_above(grid%ny)
-    integer, allocatable :: candidates(:, :), n_candidates(:)
     real(wp) :: h_max, h_min, image_cells
 
     ! Planes beyond the slab that the stencils can reach: d_G <= h_max (a fluid neighbour lies one
@@ -292,7 +296,6 @@ contains
       do g = 1, nodes%n_ghost
         work%ghost_index(nodes%ghost(g)%node(1), nodes%ghost(g)%node(2), nodes%ghost(g)%node(3)) = g
       end do
-      call fallback_candidates(grid, bodies, options, candidates, n_candidates)
       do g = 1, nodes%n_ghost
         n = nodes%ghost(g)%body
         call build_ghost_record(grid, bodies, options, component, status, k_lo, work%ghost_index, &
