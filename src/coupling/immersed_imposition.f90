@@ -339,7 +339,7 @@ contains
       do m = rows%reader_start(n_ghost + 1), rows%n_moving
         associate (corner => rows%moving(1, m), g => rows%moving(2, m))
           value = source_value(rows%source(corner, g))
-          if (value /= rows%values(corner, g) .or. value /= value) then
+          if (value /= rows%values(corner, g)) then   ! (a NaN compares unequal: re-evaluated)
             rows%values(corner, g) = value
             call activate(g)
           end if
@@ -371,7 +371,7 @@ contains
     do i = 1, n_active
       g = rows%active(i)
       limit = max(limit, abs(updated(i) - field(rows%node(g))))
-      if (updated(i) /= field(rows%node(g)) .or. updated(i) /= updated(i)) then
+      if (updated(i) /= field(rows%node(g))) then
         rows%n_changed = rows%n_changed + 1
         rows%changed(rows%n_changed) = g
       end if
