@@ -29,7 +29,7 @@ module closest_points
   implicit none
   private
   public :: closest_points_t, find_closest_points, symmetry_axis_angle, lab_point_surface_angles, &
-            closest_points_relative_tolerance
+            closest_points_relative_tolerance, gap_lower_bound
 
   !> Convergence: tangential mismatch |(I - n n^T)(x2 - x1)| below this times the smaller radius
   !> (the gap error is then ~ (1e-12 r)^2 / (radii of curvature), far below round-off).
@@ -142,6 +142,34 @@ contains
       result%message = trim(result%message)//' '//trim(first_reason)
     end if
   end subroutine closest_points_matrices
+
+  !> A lower bound (m) of the signed surface gap of two spheroids, without the Newton solve: the
+  !> slab gap G(n) = n.(X2 - X1) - h_1(n) - h_2(n) (module header) is at most the signed distance
+  !> for every unit n (separating-plane theorem), so the larger of G at the last common normal
+  !> (when previous converged) and at the centre line bounds the gap from below. A spheroid's
+  !> support function along a unit n is h(n) = sqrt(b^2 + (a^2 - b^2) (n.e)^2), e its symmetry axis.
+  pure function gap_lower_bound(body1, centre1, orientation1, body2, centre2, orientation2, previous) result(bound)
+    type(spheroid_t), intent(in) :: body1, body2
+    real(wp), intent(in) :: centre1(3), orientation1(4), centre2(3), orientation2(4)
+    type(closest_points_t), intent(in) :: previous
+    real(wp) :: bound
+    real(wp) :: separation(3), axis1(3), axis2(3), distance
+    separation = centre2 - centre1
+    axis1 = symmetry_axis(orientation1)
+    axis2 = symmetry_axis(orientation2)
+    bound = -huge(1.0_wp)
+    distance = norm2(separation)
+    if (distance > 0.0_wp) bound = slab_gap_along(separation / distance)
+    if (previous%converged .and. norm2(previous%normal) > 0.5_wp) &
+      bound = max(bound, slab_gap_along(previous%normal / norm2(previous%normal)))
+  contains
+    pure real(wp) function slab_gap_along(normal)
+      real(wp), intent(in) :: normal(3)
+      slab_gap_along = dot_product(separation, normal) &
+          - sqrt(body1%b**2 + (body1%a**2 - body1%b**2) * dot_product(normal, axis1)**2) &
+          - sqrt(body2%b**2 + (body2%a**2 - body2%b**2) * dot_product(normal, axis2)**2)
+    end function slab_gap_along
+  end function gap_lower_bound
 
   !> M = R S^2 R^T: the support function of the rotated spheroid is sqrt(n^T M n).
   pure function quadratic_form(body, rotation) result(form)

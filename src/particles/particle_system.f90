@@ -43,8 +43,8 @@ module particle_system
   use error_handling, only: fatal
   use spheroid, only: spheroid_t
   use rigid_body, only: rigid_body_t, added_inertia_t, rigid_body_step, kinetic_energy
-  use closest_points, only: closest_points_t, find_closest_points
-  use dlvo, only: dlvo_model_t, dlvo_evaluation_t, dlvo_evaluate, dlvo_cutoff_gap
+  use closest_points, only: closest_points_t, find_closest_points, gap_lower_bound
+  use dlvo, only: dlvo_model_t, dlvo_evaluation_t, dlvo_evaluate, dlvo_cutoff_gap, dlvo_range
   use collision, only: collision_model_t, collision_result_t, collision_detected, collide, approach_speed, &
                        detection_distance, normal_speed_at, normal_correction, regime_frictionless
   use lubrication, only: lubrication_model_t, lubrication_result_t, lubricate
@@ -346,11 +346,16 @@ contains
     type(particle_system_t), intent(inout) :: system
     real(wp), intent(in) :: dt
     integer :: p
+    real(wp) :: reach
     system%search_gap = system%models%interaction_gap
     if (system%models%collisions) system%search_gap = max(system%search_gap, collision_reach(system, dt))
     if (system%near_pairs_only) call refresh_pairs(system)
+    ! Surfaces farther apart than this need no closest points: beyond the search gap no model acts,
+    ! and beyond the DLVO range no pair is bound (module pair_outcome).
+    reach = system%search_gap
+    if (system%models%dlvo) reach = max(reach, dlvo_range(system%models%dlvo_model))
     do p = 1, size(system%pairs)
-      call update_contact(system, system%pairs(p))
+      call update_contact(system, system%pairs(p), reach)
     end do
     call resolve_collisions(system, dt)
     if (allocated(system%members)) then
@@ -486,10 +491,13 @@ contains
 
   !> Closest points of one pair, warm-started from its last ones; inactive (and its warm start
   !> dropped) when the bounding spheres are farther apart than the broad phase's gap (the models'
-  !> interaction gap, widened by the collision reach).
-  subroutine update_contact(system, pair)
+  !> interaction gap, widened by the collision reach); inactive (its last closest points kept as the
+  !> warm start) when a lower bound of the surface gap from the support functions exceeds reach
+  !> (m): needles and disks whose bounding spheres overlap are mostly far apart.
+  subroutine update_contact(system, pair, reach)
     type(particle_system_t), intent(in) :: system
     type(particle_pair_t), intent(inout) :: pair
+    real(wp), intent(in) :: reach
     type(closest_points_t) :: previous   ! a copy: the result overwrites pair%contact
     type(rigid_body_t) :: first, second
     character(len=40) :: which
@@ -500,6 +508,10 @@ contains
                         system%bounding_radii(pair%second), system%box_length, system%search_gap)) then
       pair%contact = closest_points_t()
       return
+    end if
+    if (reach < huge(1.0_wp)) then
+      if (gap_lower_bound(system%shapes(pair%first), first%position, first%quaternion, system%shapes(pair%second), &
+                          second%position, second%quaternion, pair%contact) > reach) return
     end if
     previous = pair%contact
     call find_closest_points(system%shapes(pair%first), first%position, first%quaternion, system%shapes(pair%second), &
@@ -830,12 +842,9 @@ contains
     type(rigid_body_t) :: second
     pair%dlvo = dlvo_evaluation_t()
     if (.not. (system%models%dlvo .and. pair%active)) return
-    ! Within the collision reach but beyond the interaction gap: below the DLVO cut-off.
-    if (system%models%interaction_gap < system%search_gap) then
-      if (.not. near_pair(system%bodies(pair%first)%position, system%bodies(pair%second)%position, &
-                          system%bounding_radii(pair%first), system%bounding_radii(pair%second), system%box_length, &
-                          system%models%interaction_gap)) return
-    end if
+    ! Beyond the interaction gap both terms are below their cut-off fraction (particle_interaction_gap):
+    ! no force. The pair scenes (gap huge) never cut the force off.
+    if (pair%contact%gap > system%models%interaction_gap) return
     second = pair_body_image(system, pair)
     call dlvo_evaluate(system%models%dlvo_model, system%shapes(pair%first), system%bodies(pair%first), &
                        system%shapes(pair%second), second, pair%contact, pair%dlvo)

@@ -1,16 +1,17 @@
-! checks: 23
+! checks: 25
 !> Tests of closest_points: exact cases (spheres; coaxial and laterally offset parallel disks;
 !> tip-to-tip, side-by-side and crossed needles; overlaps), >= 1000 random pairs against an
 !> independent brute-force reference (dense sampling of body 1's surface, exact point-to-spheroid
-!> distance to body 2, local refinement), warm starts, the failure report, psi and the
-!> parametric angles of the closest points.
+!> distance to body 2, local refinement), warm starts, the gap's lower bound without the solve, the
+!> failure report, psi and the parametric angles of the closest points.
 program test_closest_points
   use agglo_kinds, only: wp, i8
   use physical_constants, only: pi
   use random_stream, only: random_stream_t, stream_seed, stream_uniform, stream_normal
   use quaternion, only: quaternion_product, quaternion_from_axis_angle, rotation_matrix, random_orientation
   use spheroid, only: spheroid_t, make_spheroid, surface_point, implicit_function, support_value
-  use closest_points, only: closest_points_t, find_closest_points, symmetry_axis_angle, lab_point_surface_angles
+  use closest_points, only: closest_points_t, find_closest_points, symmetry_axis_angle, lab_point_surface_angles, &
+                            gap_lower_bound
   use wall_clock, only: wall_time
   use brute_force_distance, only: point_ellipse_distance, brute_force_gap
   use test_framework, only: test_start, test_finish, check, check_close, check_below, check_equal
@@ -266,9 +267,10 @@ contains
     integer, parameter :: n_pairs = 1200
     integer :: k, kind, n_converged, max_iterations, total_iterations, n_fallback, it
     real(wp) :: worst_error, error, target, brute, worst_consistency, ratio, worst_bound, smallest_gap, largest_gap
+    real(wp) :: worst_cold_bound, worst_warm_bound
     character(len=16) :: name1, name2
     character(len=200) :: detail
-    worst_error = 0; worst_consistency = 0; worst_bound = 0
+    worst_error = 0; worst_consistency = 0; worst_bound = 0; worst_cold_bound = -huge(1.0_wp); worst_warm_bound = 0
     n_converged = 0; max_iterations = 0; total_iterations = 0; n_fallback = 0
     smallest_gap = huge(1.0_wp); largest_gap = 0
     do k = 1, n_pairs
@@ -321,7 +323,14 @@ contains
         ! the convergence criterion bounds this by 1e-12 of the smaller radius
         norm2(res%point2 - res%point1 - res%gap * res%normal) / min(body1%radius, body2%radius))
       worst_bound = max(worst_bound, res%distance_bound / radius)
+      ! The gap's lower bound without the solve (gap_lower_bound, the slab gap G): from the centre
+      ! line alone at most the gap; at the converged normal the gap itself (G(n*) = h).
+      worst_cold_bound = max(worst_cold_bound, &
+                             (gap_lower_bound(body1, c1, q1, body2, c2, q2, closest_points_t()) - res%gap) / radius)
+      worst_warm_bound = max(worst_warm_bound, abs(gap_lower_bound(body1, c1, q1, body2, c2, q2, res) - res%gap) / radius)
     end do
+    call check_below(worst_cold_bound, 1.0e-12_wp, 'lower_bound_from_centre_line_below_gap')
+    call check_below(worst_warm_bound, 1.0e-12_wp, 'lower_bound_at_common_normal_is_gap')
     write(*, '(a,i0,a,i0,a,f5.2,a,i0,a,es10.3,a,es10.3,a)') '  random pairs: ', n_pairs, ' converged ', n_converged, &
       ', mean iterations ', real(total_iterations, wp) / n_pairs, ', max ', max_iterations, ', gaps ', smallest_gap, &
       ' .. ', largest_gap, ' m'

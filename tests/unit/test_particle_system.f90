@@ -1,8 +1,10 @@
-! checks: 47
+! checks: 52
 !> Unit tests of particle_system: three spheres in a line colliding head-on (Newton's cradle, in the
 !> order of the pair list), eight spheroids placed at random without overlap in a periodic box and
 !> stepped with DLVO and collisions, and a pair straddling the periodic boundary against the same
-!> pair in the interior; 200 spheres in a periodic box with the DLVO cut-off: pair records for the
+!> pair in the interior; two needles side by side skipped by the support functions' lower bound of
+!> their gap, and the DLVO cut-off on the surface gap; 200 spheres in a periodic box with the DLVO
+!> cut-off: pair records for the
 !> near pairs only (against brute force), kept across steps (warm starts), the cut-off's effect on
 !> the DLVO loads bounded by its fraction, momentum, and a restart bit for bit.
 program test_particle_system
@@ -36,6 +38,7 @@ program test_particle_system
   call pair_across_the_boundary()
   call restart_from_saved_state()
   call broad_phase()
+  call needles_side_by_side()
   call many_bodies_near_pairs()
   call test_finish()
 
@@ -331,6 +334,56 @@ contains
                'attraction pulls body 1 towards body 2 (+x)')
     call check_close(system%pairs(1)%contact%gap, 10.0e-6_wp, 1.0e-12_wp, 'no_cut_off_gap')
   end subroutine broad_phase
+
+  !> Two parallel needles (aspect ratio 4) side by side across their axes, the surfaces g apart: their
+  !> bounding spheres (radius a = 2.5 r) overlap, so the broad phase keeps the pair. With the DLVO
+  !> cut-off (interaction gap 500 nm): at g = 5 um the support functions' lower bound of the gap (here
+  !> the gap itself) skips the closest points (inactive, no DLVO); at g = 300 nm the pair is active,
+  !> its gap g and the vdW attraction pulls body 2 towards body 1; moved back to 5 um it is inactive
+  !> again with its last closest points kept (the next warm start). With the collision reach widened
+  !> to 2 um (body 2 sliding along its axis at 10 m/s) the pair at g = 1 um has its closest points
+  !> but no DLVO force: the cut-off acts on the surface gap, not on the bounding spheres.
+  subroutine needles_side_by_side()
+    real(wp), parameter :: dt = 1.0e-7_wp
+    type(spheroid_t) :: needle
+    type(rigid_body_t) :: bodies(2)
+    type(particle_system_t) :: system
+    type(particle_models_t) :: models
+    needle = make_spheroid('needle', radius, density, 4.0_wp)
+    models = models_of(.true., 0.4_wp)
+    models%interaction_gap = particle_interaction_gap(models)
+    call side_by_side(bodies, needle, 5.0e-6_wp, 0.0_wp)
+    call particle_system_create(system, [needle, needle], bodies, models)
+    call particle_system_interact(system, dt)
+    call check(.not. system%pairs(1)%active .and. all(system%dlvo_loads%force == 0.0_wp), &
+               'needles_far_by_support_functions_skipped')
+    call side_by_side(bodies, needle, 300.0e-9_wp, 0.0_wp)
+    call particle_system_create(system, [needle, needle], bodies, models)
+    call particle_system_interact(system, dt)
+    call check(system%pairs(1)%active .and. system%dlvo_loads%force(2, 2) < 0.0_wp, 'needles_near_attracted')
+    call check_close(system%pairs(1)%contact%gap, 300.0e-9_wp, 1.0e-9_wp, 'needles_near_gap')
+    system%bodies(2)%position(2) = system%bodies(2)%position(2) + 4.7e-6_wp
+    system%pairs(1)%active = .false.
+    call particle_system_interact(system, dt)
+    call check(.not. system%pairs(1)%active .and. system%pairs(1)%contact%converged .and. &
+               abs(system%pairs(1)%contact%gap - 300.0e-9_wp) < 1.0e-15_wp, 'needles_skipped_keep_warm_start')
+    call side_by_side(bodies, needle, 1.0e-6_wp, 10.0_wp)
+    call particle_system_create(system, [needle, needle], bodies, models)
+    call particle_system_interact(system, dt)
+    call check(system%search_gap > 1.5e-6_wp .and. system%pairs(1)%active .and. &
+               all(system%dlvo_loads%force == 0.0_wp), 'dlvo_cut_off_on_the_surface_gap')
+  end subroutine needles_side_by_side
+
+  !> Two equal spheroids with their symmetry axes along x, side by side along y, the surfaces gap
+  !> apart; body 2 moving along x at sliding (m/s).
+  subroutine side_by_side(bodies, shape, gap, sliding)
+    type(rigid_body_t), intent(out) :: bodies(2)
+    type(spheroid_t), intent(in) :: shape
+    real(wp), intent(in) :: gap, sliding
+    call rigid_body_of_spheroid(bodies(1), shape, [0.0_wp, 0.0_wp, 0.0_wp], [1.0_wp, 0.0_wp, 0.0_wp, 0.0_wp])
+    call rigid_body_of_spheroid(bodies(2), shape, [0.0_wp, 2.0_wp * shape%b + gap, 0.0_wp], &
+                                [1.0_wp, 0.0_wp, 0.0_wp, 0.0_wp], velocity=[sliding, 0.0_wp, 0.0_wp])
+  end subroutine side_by_side
 
   !> 200 spheres (radius r) at random without overlap in a periodic cube (20% by volume), random
   !> velocities of 0.2 m/s, DLVO and collisions. With the interaction gap of particle_interaction_gap
