@@ -21,7 +21,9 @@
 !> a box the pairs whose bounding spheres are within the search gap (models%interaction_gap,
 !> widened by the collision reach), a pair still near keeping its record across steps. With a gap
 !> of huge() both are the full list (the pair scenes: results as they always were). Pairs beyond
-!> the gap skip steps 2-4; the DLVO force acts within models%interaction_gap only.
+!> the gap skip steps 2-4, and so do pairs whose surfaces a lower bound from the support functions
+!> puts beyond every model's reach (update_contact); the DLVO force acts where the surface gap is
+!> within models%interaction_gap only.
 !>
 !> Simultaneous impulses (resolve_collisions): in waves of the contacts approaching at the wave's
 !> start, each swept in the order of the records until no contact is off its restitution target
