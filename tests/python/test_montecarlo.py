@@ -231,7 +231,9 @@ def test_resume_after_the_batch_is_killed_mid_way(pair_scene, spaced_tmp):
     command = [str(MONTECARLO), "--deck", pair_deck, "--runs", "3", "--seed", "7", "--out", str(root),
                "--agglo", agglo, "--set", f"run.end_time={END_TIME}", "-j", "1"]
     driver = subprocess.Popen(command, cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    started = root / "run_0002" / "run.nml"           # the code has started run 2
+    # The code has started run 2: agglo.log is opened after run.nml is written (io/run_directory),
+    # so waiting for it leaves no window in which the kill lands between the two.
+    started = root / "run_0002" / "agglo.log"
     deadline = time.time() + 120
     while not started.exists() and driver.poll() is None and time.time() < deadline:
         time.sleep(0.002)
