@@ -4,9 +4,9 @@
 !> stepped with DLVO and collisions, and a pair straddling the periodic boundary against the same
 !> pair in the interior; two needles side by side skipped by the support functions' lower bound of
 !> their gap, and the DLVO cut-off on the surface gap; 200 spheres in a periodic box with the DLVO
-!> cut-off: pair records for the
-!> near pairs only (against brute force), kept across steps (warm starts), the cut-off's effect on
-!> the DLVO loads bounded by its fraction, momentum, and a restart bit for bit.
+!> cut-off: pair records for the near pairs only (against brute force), kept across steps (warm
+!> starts), the cut-off's effect on the DLVO loads bounded by its fraction, momentum, and a restart
+!> bit for bit.
 program test_particle_system
   use agglo_kinds, only: wp, i8
   use config_dlvo, only: dlvo_config_t
