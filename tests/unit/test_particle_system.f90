@@ -349,6 +349,7 @@ contains
     type(rigid_body_t) :: bodies(2)
     type(particle_system_t) :: system
     type(particle_models_t) :: models
+    real(wp) :: kept
     needle = make_spheroid('needle', radius, density, 4.0_wp)
     models = models_of(.true., 0.4_wp)
     models%interaction_gap = particle_interaction_gap(models)
@@ -362,11 +363,13 @@ contains
     call particle_system_interact(system, dt)
     call check(system%pairs(1)%active .and. system%dlvo_loads%force(2, 2) < 0.0_wp, 'needles_near_attracted')
     call check_close(system%pairs(1)%contact%gap, 300.0e-9_wp, 1.0e-9_wp, 'needles_near_gap')
+    kept = system%pairs(1)%contact%gap
     system%bodies(2)%position(2) = system%bodies(2)%position(2) + 4.7e-6_wp
     system%pairs(1)%active = .false.
     call particle_system_interact(system, dt)
+    ! Exact on purpose: the skipped pair's record is the stored one, not recomputed.
     call check(.not. system%pairs(1)%active .and. system%pairs(1)%contact%converged .and. &
-               abs(system%pairs(1)%contact%gap - 300.0e-9_wp) < 1.0e-15_wp, 'needles_skipped_keep_warm_start')
+               system%pairs(1)%contact%gap == kept, 'needles_skipped_keep_warm_start')
     call side_by_side(bodies, needle, 1.0e-6_wp, 10.0_wp)
     call particle_system_create(system, [needle, needle], bodies, models)
     call particle_system_interact(system, dt)
