@@ -38,6 +38,16 @@ FEW_SAMPLES = 30
 # &collision detection_floor when run.nml does not give it (the code's default, docs/decks.md).
 DEFAULT_DETECTION_FLOOR = 1.0e-9
 _DETECTION_FLOOR = re.compile(r"detection_floor\s*=\s*([-+0-9.]+(?:[eEdD][-+]?[0-9]+)?)", re.I)
+# The DLVO deck values of run.nml that set the range of the well (docs/theory.md, "Run outcome"):
+# h_r = 60 Debye lengths, at least the van der Waals cut-off.
+_NUMBER = r"\s*=\s*([-+0-9.]+(?:[eEdD][-+]?[0-9]+)?)"
+_DEBYE_KAPPA = re.compile(r"\bdebye_kappa" + _NUMBER, re.I)
+_VDW_CUTOFF = re.compile(r"\bvdw_cutoff" + _NUMBER, re.I)
+_DLVO_ON = re.compile(r"^\s*dlvo\s*=\s*\.?([tf])", re.I | re.M)
+DLVO_RANGE_DEBYE_LENGTHS = 60.0
+# The time of the gap the grid study compares between grids (s): a third of the chaotic
+# protocol's 3 ms, when the pairs are still closing through the film.
+GAP_SAMPLE_TIME = 1.0e-3
 
 
 class BatchError(Exception):
@@ -87,7 +97,9 @@ class Run:
         smallest sampled gap), early_approach_ratio (the normal relative velocity of the closest
         points at the second sampled row over the first, when both precede any collision and the
         pair approaches at the first: how much of the start's approach the first sample interval
-        keeps), radius (m)."""
+        keeps), gap_at_1ms (m, the gap at GAP_SAMPLE_TIME, linear between rows; None for a shorter
+        run), range_entry_time (s, the first row with the gap inside the DLVO range; None when never
+        or without DLVO), radius (m)."""
         if self._metrics is None:
             self._metrics = history_metrics(self)
         return self._metrics
@@ -104,6 +116,22 @@ class Run:
             return DEFAULT_DETECTION_FLOOR
         return float(match.group(1).replace("d", "e").replace("D", "e"))
 
+    @property
+    def dlvo_range(self):
+        """Range of the DLVO well h_r (m) of the run, from its run.nml (&dlvo debye_kappa and
+        vdw_cutoff, as the code's dlvo_range); None without DLVO or without run.nml."""
+        try:
+            with open(os.path.join(self.directory, "run.nml")) as handle:
+                text = handle.read()
+        except OSError:
+            return None
+        on, kappa, cutoff = _DLVO_ON.search(text), _DEBYE_KAPPA.search(text), _VDW_CUTOFF.search(text)
+        if on is None or on.group(1).lower() != "t" or kappa is None or cutoff is None:
+            return None
+        def number(match):
+            return float(match.group(1).replace("d", "e").replace("D", "e"))
+        return max(DLVO_RANGE_DEBYE_LENGTHS / number(kappa), number(cutoff))
+
 
 def is_fluid_run(directory):
     """A resolved-fluid run directory: fluid outputs and no pair-scene outputs."""
@@ -114,7 +142,7 @@ def is_fluid_run(directory):
 
 HISTORY_METRICS = ("max_particle_speed", "chi_eta_first_collision", "lever_arm_first_collision",
                    "contact_episodes", "carried_distance", "relative_path", "close_fraction", "min_gap",
-                   "early_approach_ratio", "radius")
+                   "early_approach_ratio", "gap_at_1ms", "range_entry_time", "radius")
 # Between two collisions of one contact episode the gap stays below this many detection floors; a
 # pair whose gap rises above it between two collisions has separated and come back (a new episode).
 EPISODE_FLOORS = 10.0
@@ -201,6 +229,11 @@ def history_metrics(run):
     values["carried_distance"] = path(np.linalg.norm(0.5 * (v1 + v2), axis=1))
     values["relative_path"] = path(np.linalg.norm(v2 - v1, axis=1))
     values["min_gap"] = float(np.min(gap))
+    if time[-1] >= GAP_SAMPLE_TIME:
+        values["gap_at_1ms"] = float(np.interp(GAP_SAMPLE_TIME, time, gap))
+    reach = run.dlvo_range
+    if reach is not None and np.any(gap <= reach):
+        values["range_entry_time"] = float(time[np.argmax(gap <= reach)])
     if approach is not None and approach.size > 1 and approach[0] > 0.0 and \
             (events.size == 0 or events.min() > time[1]):
         values["early_approach_ratio"] = float(approach[1] / approach[0])
@@ -341,7 +374,7 @@ RUN_COLUMNS = ("batch", "run", "group", "name", "seed", "shape", "aspect_ratio",
                "final_relative_velocity", "psi_final", "end_time", "steps", "wall_time",
                "max_particle_speed", "chi_eta_first_collision", "lever_arm_first_collision",
                "contact_episodes", "carried_distance", "relative_path", "close_fraction", "min_gap",
-               "early_approach_ratio", "ended_in_flight")
+               "early_approach_ratio", "gap_at_1ms", "range_entry_time", "ended_in_flight")
 
 
 def run_row(run):

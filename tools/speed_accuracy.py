@@ -15,6 +15,10 @@ reference batch of the same shape on the seeds complete in both (tools/study_com
   gap_error           the same for the smallest gap of the run (the closest approach; about the
                       contact distance in a run that touches): how well the approach through the
                       film is resolved, on every run, touching or not
+  gap1ms_error        the same for the gap at 1 ms (agglo_stats GAP_SAMPLE_TIME): where the pair
+                      is a third of the way through the protocol
+  entry_error         the same for the time of entry into the DLVO range, over the runs that enter
+                      it in both
   cost_run_s          median wall time of a run of the variant (summary.json wall_time, s)
   cost_per_ms_s       median wall seconds per simulated millisecond of the variant
   cost_ratio          cost_per_ms_s of the variant over that of its reference (< 1: cheaper)
@@ -48,7 +52,8 @@ METRICS = (("outcome_disagreement", "1 - outcome agreement"),
            ("gap_error", "smallest gap, median relative error"))
 COLUMNS = ("knob", "variant", "shape", "reference", "paired_runs", "outcome_agreement",
            "agreement_low", "agreement_high", "vn_error", "vn_runs", "chi_error", "chi_runs",
-           "vmax_error", "vmax_runs", "gap_error", "gap_runs", "cost_run_s", "cost_per_ms_s", "cost_ratio", "status")
+           "vmax_error", "vmax_runs", "gap_error", "gap_runs", "gap1ms_error", "gap1ms_runs",
+           "entry_error", "entry_runs", "cost_run_s", "cost_per_ms_s", "cost_ratio", "status")
 
 
 class ManifestError(Exception):
@@ -109,7 +114,7 @@ def compare_row(row, reference_batch):
                cost_per_ms_s=cost_ms if cost_ms is not None else "")
     if row["variant"] == row["reference"]:
         out.update(status="reference", outcome_agreement=1.0, vn_error=0.0, chi_error=0.0, vmax_error=0.0,
-                   gap_error=0.0)
+                   gap_error=0.0, gap1ms_error=0.0, entry_error=0.0)
         return out
     if reference_batch is None or not os.path.exists(reference_batch):
         out["status"] = "reference not run"
@@ -128,7 +133,7 @@ def compare_row(row, reference_batch):
     out.update(paired_runs=len(pairs), outcome_agreement=same / len(pairs), agreement_low=low,
                agreement_high=high, status="compared")
     for column, key in (("vn", "normal_velocity_before"), ("chi", "chi_eta"), ("vmax", "max_particle_speed"),
-                        ("gap", "min_gap")):
+                        ("gap", "min_gap"), ("gap1ms", "gap_at_1ms"), ("entry", "range_entry_time")):
         error, count = relative_error(pairs, key)
         out[f"{column}_error"] = "" if error is None else error
         out[f"{column}_runs"] = count
@@ -157,9 +162,9 @@ def markdown(rows):
     for knob in dict.fromkeys(row["knob"] for row in rows):
         lines += [f"### {knob}", "",
                   "| shape | variant | reference | paired runs | outcome agreement [Wilson 95%] | "
-                  "v_n error | chi_eta error | v_max error | min gap error | wall s / run | "
-                  "wall s / simulated ms | cost / reference | status |",
-                  "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+                  "v_n error | chi_eta error | v_max error | min gap error | gap at 1 ms error | "
+                  "DLVO range entry time error | wall s / run | wall s / simulated ms | cost / reference | status |",
+                  "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
         for row in (r for r in rows if r["knob"] == knob):
             agreement = _format(row["outcome_agreement"], ".3f")
             if row["agreement_low"] != "":
@@ -167,7 +172,9 @@ def markdown(rows):
             lines.append(f"| {row['shape']} | {row['variant']} | {row['reference']} | "
                          f"{row['paired_runs'] or '–'} | {agreement} | {_format(row['vn_error'], '.3g')} | "
                          f"{_format(row['chi_error'], '.3g')} | {_format(row['vmax_error'], '.3g')} | "
-                         f"{_format(row['gap_error'], '.3g')} | {_format(row['cost_run_s'], '.3g')} | {_format(row['cost_per_ms_s'], '.3g')} | "
+                         f"{_format(row['gap_error'], '.3g')} | {_format(row['gap1ms_error'], '.3g')} | "
+                         f"{_format(row['entry_error'], '.3g')} ({row['entry_runs'] or 0}) | "
+                         f"{_format(row['cost_run_s'], '.3g')} | {_format(row['cost_per_ms_s'], '.3g')} | "
                          f"{_format(row['cost_ratio'], '.3g')} | {row['status']} |")
         lines.append("")
     return "\n".join(lines)

@@ -32,7 +32,9 @@ from agglo_stats import BatchError, load_runs  # noqa: E402
 
 PER_RUN = ("outcome", "collisions", "contact_episodes", "normal_velocity_before", "chi_eta",
            "psi", "lever_arm", "max_particle_speed", "min_gap", "early_approach_ratio", "final_gap",
-           "wall_time", "end_time")
+           "wall_time", "end_time", "gap_at_1ms", "range_entry_time")
+# Columns a run table written before they existed lacks: read as None.
+OPTIONAL_RUN_VALUES = ("gap_at_1ms", "range_entry_time")
 COLUMNS = ("run", "seed", "changed") + tuple(f"{side}_{key}" for key in PER_RUN
                                               for side in ("reference", "variant"))
 RUN_TABLE_COLUMNS = ("run", "seed") + PER_RUN
@@ -54,7 +56,8 @@ def run_values(run):
             "max_particle_speed": metrics["max_particle_speed"],
             "min_gap": metrics["min_gap"], "early_approach_ratio": metrics["early_approach_ratio"],
             "final_gap": run.summary["final_gap"], "wall_time": run.summary["wall_time"],
-            "end_time": run.summary["end_time"]}
+            "end_time": run.summary["end_time"], "gap_at_1ms": metrics["gap_at_1ms"],
+            "range_entry_time": metrics["range_entry_time"]}
 
 
 def is_run_table(batch):
@@ -72,10 +75,11 @@ def read_run_table(path):
     try:
         with open(path, newline="") as handle:
             reader = csv.DictReader(handle)
-            missing = [c for c in RUN_TABLE_COLUMNS if c not in (reader.fieldnames or ())]
+            missing = [c for c in RUN_TABLE_COLUMNS
+                       if c not in (reader.fieldnames or ()) and c not in OPTIONAL_RUN_VALUES]
             if missing:
                 raise BatchError(f"run table '{path}' lacks the column(s) {', '.join(missing)}")
-            runs = {row["run"]: (int(row["seed"]), {key: value(key, row[key]) for key in PER_RUN})
+            runs = {row["run"]: (int(row["seed"]), {key: value(key, row.get(key) or "") for key in PER_RUN})
                     for row in reader}
     except (OSError, ValueError) as error:
         raise BatchError(f"run table '{path}' unreadable: {error}") from error

@@ -184,3 +184,35 @@ def test_batch_without_any_contact_still_gives_rates_and_figures(spaced_tmp):
     assert "[0.000, 0.561]" in result.stdout
     for stem in FIGURES:
         assert (spaced_tmp / "stats" / f"{stem}.png").stat().st_size > 5000, stem
+
+
+def test_gap_at_1ms_and_dlvo_range_entry(spaced_tmp):
+    """The grid study's two history metrics on a fake run whose gap closes linearly from 5 um at
+    (5 um - 100 nm) / 5 ms (fake_pair_scene, 'approached'): the gap at 1 ms is that line's value
+    (linear between rows, so exact to round-off), and the entry into the DLVO range is the first
+    row at or below h_r = 60 / debye_kappa (docs/theory.md, "Run outcome": 182.4 nm for
+    kappa = 3.29e8 1/m), or the van der Waals cut-off when that is wider; none without DLVO."""
+    import math
+
+    from agglo_stats import load_runs
+    end_time, rows, gap0 = 1.0e-2, 200, 5.0e-6
+    speed = (gap0 - 1.0e-7) / (0.5 * end_time)
+    row_interval = end_time / (rows - 1)
+    cases = {"kappa": (" DLVO=T,", 3.2894736842105263e8, 5.0e-9, 60.0 / 3.2894736842105263e8),
+             "cutoff": (" DLVO=T,", 3.2894736842105263e8, 1.0e-6, 1.0e-6),
+             "off": (" DLVO=F,", 3.2894736842105263e8, 5.0e-9, None)}
+    for name, (switch, kappa, cutoff, reach) in cases.items():
+        directory = spaced_tmp / name / "run_0001"
+        directory.mkdir(parents=True)
+        (directory / "run.nml").write_text(f"&SCENE\n FLUID=\"none\",\n{switch}\n /\n&DLVO\n "
+                                           f"DEBYE_KAPPA=  {kappa!r}     ,\n VDW_CUTOFF=  {cutoff!r},\n /\n")
+        write_run(str(directory), seed=1, outcome="approached", end_time=end_time, rows=rows)
+        run = load_runs([str(spaced_tmp / name)])[0][0]
+        metrics = run.metrics()
+        assert metrics["gap_at_1ms"] == pytest.approx(gap0 - speed * 1.0e-3, rel=1e-12)
+        if reach is None:
+            assert run.dlvo_range is None and metrics["range_entry_time"] is None
+            continue
+        assert run.dlvo_range == pytest.approx(reach, rel=1e-14)
+        first_row = math.ceil((gap0 - reach) / speed / row_interval)
+        assert metrics["range_entry_time"] == pytest.approx(first_row * row_interval, rel=1e-12)
