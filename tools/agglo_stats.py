@@ -37,10 +37,11 @@ FLUID_MARKERS = ("fields.xdmf", "fluid_statistics.dat", "flow_statistics.h5")
 FEW_SAMPLES = 30
 # &collision detection_floor when run.nml does not give it (the code's default, docs/decks.md).
 DEFAULT_DETECTION_FLOOR = 1.0e-9
-_DETECTION_FLOOR = re.compile(r"detection_floor\s*=\s*([-+0-9.]+(?:[eEdD][-+]?[0-9]+)?)", re.I)
+# "name = number" of a run.nml (the number as Fortran writes it, with an e or d exponent).
+_NUMBER = r"\s*=\s*([-+0-9.]+(?:[eEdD][-+]?[0-9]+)?)"
+_DETECTION_FLOOR = re.compile(r"detection_floor" + _NUMBER, re.I)
 # The DLVO deck values of run.nml that set the range of the well (docs/theory.md, "Run outcome"):
 # h_r = 60 Debye lengths, at least the van der Waals cut-off.
-_NUMBER = r"\s*=\s*([-+0-9.]+(?:[eEdD][-+]?[0-9]+)?)"
 _DEBYE_KAPPA = re.compile(r"\bdebye_kappa" + _NUMBER, re.I)
 _VDW_CUTOFF = re.compile(r"\bvdw_cutoff" + _NUMBER, re.I)
 _DLVO_ON = re.compile(r"^\s*dlvo\s*=\s*\.?([tf])", re.I | re.M)
@@ -114,7 +115,7 @@ class Run:
             match = None
         if match is None:
             return DEFAULT_DETECTION_FLOOR
-        return float(match.group(1).replace("d", "e").replace("D", "e"))
+        return _deck_number(match)
 
     @property
     def dlvo_range(self):
@@ -128,9 +129,12 @@ class Run:
         on, kappa, cutoff = _DLVO_ON.search(text), _DEBYE_KAPPA.search(text), _VDW_CUTOFF.search(text)
         if on is None or on.group(1).lower() != "t" or kappa is None or cutoff is None:
             return None
-        def number(match):
-            return float(match.group(1).replace("d", "e").replace("D", "e"))
-        return max(DLVO_RANGE_DEBYE_LENGTHS / number(kappa), number(cutoff))
+        return max(DLVO_RANGE_DEBYE_LENGTHS / _deck_number(kappa), _deck_number(cutoff))
+
+
+def _deck_number(match):
+    """The number of a _NUMBER match of run.nml as a float."""
+    return float(match.group(1).replace("d", "e").replace("D", "e"))
 
 
 def is_fluid_run(directory):
