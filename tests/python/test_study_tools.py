@@ -221,6 +221,11 @@ def test_speed_accuracy_metrics_table_and_plots(spaced_tmp):
     # smallest gap, and the median error is that of the six identical runs.
     assert int(cheap["gap_runs"]) == 8
     assert float(cheap["gap_error"]) == 0.0
+    # The same for the gap at 1 ms (every fake run lasts 10 ms); the fake decks have no &dlvo, so
+    # no run enters a DLVO range and the entry time has no error to give.
+    assert int(cheap["gap1ms_runs"]) == 8
+    assert float(cheap["gap1ms_error"]) == 0.0
+    assert int(cheap["entry_runs"]) == 0 and cheap["entry_error"] == ""
     assert rows["base"]["status"] == "reference"
     assert rows["missing"]["status"] == "not run"
     table = (out / "speed_accuracy.md").read_text()
