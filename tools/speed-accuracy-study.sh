@@ -169,10 +169,20 @@ table_field_matches() {
 variant() {
   local knob=$1 name=$2 reference=$3 deck=$4 count=$5 shape; shift 5
   for shape in "${shape_list[@]}"; do
+    local -a sets=("${@//SHAPE/$shape}")
+    # A variant the code refuses for this shape (the disk, 4.4 cells thick at 128^3, is 3.3 at 96^3:
+    # too thin for the immersed boundary) is left out of the study, with the code's reason.
+    local refusal
+    if ! refusal=$("${AGGLO:-$study_repo/build/agglo}" "${deck//SHAPE/$shape}" "${sets[@]}" --print-deck \
+                   2>&1 > /dev/null < /dev/null); then
+      [ -n "${declared[$shape-$name]+x}" ] && continue
+      declared[$shape-$name]=1
+      echo "batch $shape-$name: not run: the code refuses its deck: $(grep -m1 -o 'deck: .*' <<< "$refusal")"
+      continue
+    fi
     manifest_rows+=("$knob"$'\t'"$name"$'\t'"$shape"$'\t'"$shape-$name"$'\t'"$reference")
     [ -n "${declared[$shape-$name]+x}" ] && continue
     declared[$shape-$name]=1
-    local -a sets=("${@//SHAPE/$shape}")
     local table="$tables/$shape-$name.csv" root="$study_out/$shape-$name" tabled
     if table_matches "$shape-$name" "${deck//SHAPE/$shape}" "${sets[@]}" && study_selected "$shape-$name"; then
       tabled=$(( $(wc -l < "$table") - 1 ))

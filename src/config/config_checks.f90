@@ -8,6 +8,7 @@ module config_checks
   use config_forcing, only: forcing_mode_extent
   use config_grid, only: smallest_spacing
   use config_suspension, only: species_count, species_semi_axes
+  use config_shapes, only: deck_semi_axes
   use error_handling, only: input_error, fatal
   implicit none
   private
@@ -25,7 +26,59 @@ contains
     if (cfg%scene%particles == 'pair' .and. cfg%scene%fluid == 'resolved') call check_pair_in_box(cfg)
     if ((cfg%scene%particles == 'prescribed' .or. cfg%scene%particles == 'free') .and. cfg%scene%fluid == 'resolved') &
       call check_bodies_in_box(cfg)
+    if (immersed_bodies(cfg)) call check_bodies_thick_enough(cfg)
   end subroutine check_cross_groups
+
+  !> The scene imposes its bodies with the immersed boundary: bodies in prescribed motion, or free
+  !> bodies (pair, &bodies, suspension) with &scene particle_coupling = 'resolved'.
+  logical function immersed_bodies(cfg)
+    type(agglo_config_t), intent(in) :: cfg
+    immersed_bodies = cfg%scene%fluid == 'resolved' .and. (cfg%scene%particles == 'prescribed' .or. &
+                      (free_particles(cfg) .and. cfg%scene%particle_coupling == 'resolved'))
+  end function immersed_bodies
+
+  !> Every body the immersed boundary imposes at least 4 cells of the largest grid spacing thick
+  !> (2 min(a, b)): thinner, the ghost layers of its opposite faces overlap (docs/theory.md, "Thin
+  !> bodies"). The error names the grid the body needs.
+  subroutine check_bodies_thick_enough(cfg)
+    type(agglo_config_t), intent(in) :: cfg
+    integer :: n
+    select case (cfg%scene%particles)
+    case ('pair')
+      call require_thick_enough('pair', 'radius', cfg%pair%radius, cfg%pair%shape, &
+                                deck_semi_axes(cfg%pair%shape, cfg%pair%radius, cfg%pair%aspect_ratio), cfg)
+    case ('suspension')
+      do n = 1, species_count(cfg%suspension)
+        call require_thick_enough('suspension', 'radius('//int_text(n)//')', cfg%suspension%radius(n), &
+                                  cfg%suspension%shape(n), species_semi_axes(cfg%suspension, n), cfg)
+      end do
+    case ('prescribed', 'free')
+      do n = 1, cfg%bodies%count
+        call require_thick_enough('bodies', 'radius('//int_text(n)//')', cfg%bodies%radius(n), cfg%bodies%shape(n), &
+                                  deck_semi_axes(cfg%bodies%shape(n), cfg%bodies%radius(n), cfg%bodies%aspect_ratio(n)), cfg)
+      end do
+    end select
+  end subroutine check_bodies_thick_enough
+
+  subroutine require_thick_enough(group, variable, radius, shape, semi_axes, cfg)
+    character(len=*), intent(in) :: group, variable, shape
+    real(wp), intent(in) :: radius, semi_axes(2)
+    type(agglo_config_t), intent(in) :: cfg
+    real(wp), parameter :: thinnest_cells = 4.0_wp
+    real(wp) :: spacing, cells
+    character(len=8) :: cells_text
+    character(len=:), allocatable :: remedy
+    spacing = max(cfg%grid%length_x / cfg%grid%nx, cfg%grid%length_y / cfg%grid%ny, cfg%grid%length_z / cfg%grid%nz)
+    cells = 2.0_wp * minval(semi_axes) / spacing
+    if (cells >= thinnest_cells) return
+    write(cells_text, '(f8.2)') cells
+    remedy = ' for this box, or a larger radius'
+    if (trim(shape) /= 'sphere') remedy = remedy//' or an aspect_ratio nearer 1'
+    call input_error(group, variable, real_text(radius)//' ('//trim(shape)//' '//trim(adjustl(cells_text))// &
+        ' cells thin on this grid)', 'a body at least 4 cells thick for the immersed boundary: &grid nx = ny = nz >= '// &
+        int_text(ceiling(thinnest_cells * max(cfg%grid%length_x, cfg%grid%length_y, cfg%grid%length_z) / &
+        (2.0_wp * minval(semi_axes))))//remedy)
+  end subroutine require_thick_enough
 
   !> A position given in a deck must lie in the periodic box of &grid, 0 <= x_d <= L_d: one outside
   !> would be wrapped to another place than the one written (a typo or a deck made for another box).
@@ -230,16 +283,14 @@ contains
   !> min_gap under half the smallest box length (the minimum-image convention of the pairs); the
   !> nanometre-scale model lengths far below the smallest body (the Derjaguin limit, as for the
   !> pair); min_gap above the collision detection floor (a body placed inside the detection distance
-  !> would collide at the first step); with particle_coupling = 'resolved' every species at least 4
-  !> cells thick (the ghost layers of its opposite faces would overlap), naming the grid it needs.
+  !> would collide at the first step) (the thickness the immersed boundary needs:
+  !> check_bodies_thick_enough).
   subroutine check_suspension_cross(cfg)
     type(agglo_config_t), intent(in) :: cfg
-    real(wp), parameter :: thinnest_cells = 4.0_wp
-    real(wp) :: axes(2), smallest_box, spacing, smallest_radius
+    real(wp) :: axes(2), smallest_box, smallest_radius
     integer :: k
     character(len=:), allocatable :: index
     smallest_box = min(cfg%grid%length_x, cfg%grid%length_y, cfg%grid%length_z)
-    spacing = max(cfg%grid%length_x / cfg%grid%nx, cfg%grid%length_y / cfg%grid%ny, cfg%grid%length_z / cfg%grid%nz)
     smallest_radius = huge(1.0_wp)
     do k = 1, species_count(cfg%suspension)
       index = '('//int_text(k)//')'
@@ -249,13 +300,6 @@ contains
           'suspension', 'radius'//index, real_text(cfg%suspension%radius(k)), 'a body whose longest extent 2 x '// &
           real_text(maxval(axes))//' m plus min_gap is under half the smallest box length ('// &
           real_text(0.5_wp * smallest_box)//' m; the minimum-image convention of the periodic box)')
-      if (cfg%scene%fluid == 'resolved' .and. cfg%scene%particle_coupling == 'resolved' .and. &
-          2.0_wp * minval(axes) < thinnest_cells * spacing) call input_error('suspension', 'radius'//index, &
-          real_text(cfg%suspension%radius(k))//' ('//trim(cfg%suspension%shape(k))//' '// &
-          real_text(2.0_wp * minval(axes) / spacing)//' cells thin)', 'a body at least 4 cells thick for the '// &
-          'immersed boundary with particle_coupling = ''resolved'': &grid nx = ny = nz >= '// &
-          int_text(ceiling(thinnest_cells * max(cfg%grid%length_x, cfg%grid%length_y, cfg%grid%length_z) / &
-          (2.0_wp * minval(axes))))//' for this box, or a larger radius')
     end do
     if (cfg%scene%dlvo .and. .not. cfg%suspension%ghost) then
       if (.not. (cfg%dlvo%vdw_cutoff < 0.01_wp * smallest_radius)) call input_error('dlvo', 'vdw_cutoff', &

@@ -7,6 +7,7 @@ module config_suspension
   use deck_file, only: deck_t, check_namelist_read, require_option, require_positive, require_nonnegative, &
                        int_text, real_text
   use error_handling, only: input_error
+  use config_shapes, only: deck_semi_axes
   implicit none
   private
   public :: suspension_config_t, read_suspension_group, check_suspension_group, write_suspension_group, &
@@ -77,16 +78,8 @@ contains
   pure function species_semi_axes(cfg, k) result(axes)
     type(suspension_config_t), intent(in) :: cfg
     integer, intent(in) :: k
-    real(wp) :: axes(2), ratio
-    ratio = 1.0_wp
-    select case (trim(cfg%shape(k)))
-    case ('needle', 'spheroid')
-      ratio = cfg%aspect_ratio(k)
-    case ('disk')
-      ratio = 1.0_wp / cfg%aspect_ratio(k)
-    end select
-    axes(2) = cfg%radius(k) * ratio**(-1.0_wp / 3.0_wp)
-    axes(1) = ratio * axes(2)
+    real(wp) :: axes(2)
+    axes = deck_semi_axes(cfg%shape(k), cfg%radius(k), cfg%aspect_ratio(k))
   end function species_semi_axes
 
   subroutine check_suspension_group(cfg)

@@ -30,7 +30,7 @@ module immersed_scene
   use icosphere_mesh, only: icosphere_mesh_t, build_icosphere_mesh
   use immersed_surface_loads, only: surface_loads_t, surface_loads_create, surface_loads_compute
   use config_bodies, only: bodies_config_t
-  use immersed_geometry, only: immersed_body_t, thin_dimension_cells, node_fluid
+  use immersed_geometry, only: immersed_body_t, node_fluid
   use immersed_boundary, only: immersed_boundary_t, ibm_settings_t, imposition_report_t
   use immersed_placement, only: ibm_set_bodies
   use immersed_imposition, only: ibm_impose
@@ -261,16 +261,12 @@ contains
   end subroutine place_bodies
 
   !> The bodies of the deck's &bodies group (the density is the fluid's: prescribed motion needs
-  !> none). A body thinner than 4 cells of the grid is refused with the grid it needs: the ghost
-  !> layers of its opposite faces would overlap (ibm-notes section 0).
-  function motions_from_config(cfg, grid) result(motion)
+  !> none); the deck's checks have refused bodies too thin for the grid (config_checks).
+  function motions_from_config(cfg) result(motion)
     type(bodies_config_t), intent(in) :: cfg
-    type(fluid_grid_t), intent(in) :: grid
     type(prescribed_motion_t), allocatable :: motion(:)
-    real(wp), parameter :: thinnest_cells = 4.0_wp
-    real(wp) :: cells, axis(3), ex(3), thin
-    integer :: n, needed
-    character(len=320) :: text
+    real(wp) :: axis(3), ex(3)
+    integer :: n
     allocate(motion(cfg%count))
     ex = [1.0_wp, 0.0_wp, 0.0_wp]
     do n = 1, cfg%count
@@ -278,15 +274,6 @@ contains
         motion(n)%shape = make_spheroid('sphere', cfg%radius(n), 1.0_wp)
       else
         motion(n)%shape = make_spheroid(trim(cfg%shape(n)), cfg%radius(n), 1.0_wp, cfg%aspect_ratio(n))
-      end if
-      cells = thin_dimension_cells(motion(n)%shape, grid)
-      if (cells < thinnest_cells) then
-        thin = 2.0_wp * min(motion(n)%shape%a, motion(n)%shape%b)
-        needed = ceiling(thinnest_cells * max(grid%lx, grid%ly, grid%lz) / thin)
-        write(text, '(a,i0,a,a,a,f5.2,a,i0,a,i0,a)') 'deck: &bodies body ', n, ' (', trim(cfg%shape(n)), &
-            ') is ', cells, ' cells thin on this grid; the immersed boundary needs at least 4: use &grid nx = ny = nz >= ', &
-            needed, ' (', needed, '^3 for this box) or a larger radius'
-        call fatal(trim(text))
       end if
       motion(n)%centre = cfg%centre(:, n)
       axis = cfg%axis(:, n)

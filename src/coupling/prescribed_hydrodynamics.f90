@@ -66,7 +66,7 @@ contains
     options%load_method = cfg%bodies%load_method
     if (cfg%bodies%load_method == 'surface' .or. cfg%bodies%compare_loads) options%surface_level = cfg%bodies%mesh_level
     options%predictor_config = default_predictor_config(cfg%fluid%predictor_tolerance, cfg%fluid%predictor_max_iterations)
-    call immersed_scene_create(provider%bodies, solver, motions_from_config(cfg%bodies, solver%grid), options)
+    call immersed_scene_create(provider%bodies, solver, motions_from_config(cfg%bodies), options)
     call loads_open(provider%bodies, run_file('bodies_loads.dat'), append=cfg%run%restart, last_step=solver%step)
     call bodies_output_open(provider%output, run_file('particles.h5'), cfg%bodies, cfg%run%name, &
                             int(cfg%run%seed, i8), cfg%run%restart, solver%step)

@@ -87,7 +87,7 @@ module resolved_hydrodynamics
   use spheroid, only: spheroid_t
   use icosphere_mesh, only: icosphere_mesh_t, build_icosphere_mesh
   use stokes_resistance, only: spheroid_added_mass_coefficients, stokes_resistance_t, stokes_resistance_of
-  use immersed_geometry, only: immersed_body_t, thin_dimension_cells
+  use immersed_geometry, only: immersed_body_t
   use immersed_boundary, only: ibm_settings_t, imposition_report_t
   use immersed_placement, only: ibm_set_bodies
   use immersed_imposition, only: ibm_impose
@@ -206,7 +206,6 @@ contains
     ratio_rotation = 0
     if (options%geometry_level >= 0) allocate(provider%meshes(system%n))
     do i = 1, system%n
-      call require_thick_enough(system%shapes(i), solver)
       ! At rest where the particle is: the scene's first placement; every step places the bodies anew.
       motion(i)%shape = system%shapes(i)
       motion(i)%centre = system%bodies(i)%position
@@ -275,24 +274,6 @@ contains
         'without the stabilisation: at long steps the lagged drag and history reaction can exceed the body''s mass '// &
         '(unstable; &scene added_mass = .true.)')
   end subroutine resolved_hydrodynamics_create
-
-  !> A body thinner than 4 cells is refused with the grid it needs: the ghost layers of its opposite
-  !> faces would overlap (docs/theory.md, "Thin bodies"; the same rule as for the &bodies group).
-  subroutine require_thick_enough(shape, solver)
-    type(spheroid_t), intent(in) :: shape
-    type(fluid_solver_t), intent(in) :: solver
-    real(wp), parameter :: thinnest_cells = 4.0_wp
-    real(wp) :: cells
-    integer :: needed
-    character(len=320) :: text
-    cells = thin_dimension_cells(shape, solver%grid)
-    if (cells >= thinnest_cells) return
-    needed = ceiling(thinnest_cells * max(solver%grid%lx, solver%grid%ly, solver%grid%lz) / (2.0_wp * min(shape%a, shape%b)))
-    write(text, '(a,f5.2,a,i0,a)') 'deck: &pair: the particle is ', cells, ' cells thin on this grid; the immersed '// &
-        'boundary (&scene particle_coupling = ''resolved'') needs at least 4: use &grid nx = ny = nz >= ', needed, &
-        ' for this box, or a larger &pair radius or smaller aspect_ratio'
-    call fatal(trim(text))
-  end subroutine require_thick_enough
 
   !> Rotational added inertia (kg m^2) of a spheroid about a transverse axis in potential flow
   !> (Lamb 1932 sec. 373, rotation about y of the ellipsoid (a, b, b)):

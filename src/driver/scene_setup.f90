@@ -163,8 +163,7 @@ contains
   !> &scene particles = 'free': the bodies of &bodies (shape, radius, aspect_ratio, centre, axis,
   !> velocity, angular_velocity; any number) of &pair density in the resolved fluid's periodic box,
   !> with the deck's particle models, moving under their loads. Their placement and orientation are
-  !> those of the prescribed bodies (immersed_scene motions_from_config: the same deck, the same
-  !> check that each body is at least 4 cells thick).
+  !> those of the prescribed bodies (immersed_scene motions_from_config: the same deck).
   subroutine place_free_bodies(cfg, solver, system)
     type(agglo_config_t), intent(in) :: cfg
     type(fluid_solver_t), intent(in) :: solver
@@ -173,7 +172,7 @@ contains
     type(spheroid_t), allocatable :: shapes(:)
     type(rigid_body_t), allocatable :: bodies(:)
     integer :: n
-    motion = motions_from_config(cfg%bodies, solver%grid)
+    motion = motions_from_config(cfg%bodies)
     allocate(shapes(size(motion)), bodies(size(motion)))
     do n = 1, size(motion)
       if (trim(cfg%bodies%shape(n)) == 'sphere') then
