@@ -173,10 +173,10 @@ if ran needle_aspect_10 1 "${needle10[@]}"; then
   echo "PASS resolved_extremes/needle_aspect_10  (ran: 88^3, 3 fluid steps)"
 fi
 # On 32^3 in the box each needs: refused by the immersed boundary, naming the grid.
-stopped needle_aspect_20_coarse 1 'use &grid nx = ny = nz >=' "pair.shape='needle'" "pair.aspect_ratio=20.0" \
+stopped needle_aspect_20_coarse 1 'cells thin on this grid) is not allowed; allowed: a body at least 4 cells thick for the immersed boundary: &grid nx = ny = nz >= 163' "pair.shape='needle'" "pair.aspect_ratio=20.0" \
   "pair.radius=20.0e-6" "grid.length_x=0.6e-3" "grid.length_y=0.6e-3" "grid.length_z=0.6e-3" \
   "pair.centre_position=0.3e-3,0.3e-3,0.3e-3"
-stopped disk_aspect_10_coarse 1 'use &grid nx = ny = nz >=' "pair.shape='disk'" "pair.aspect_ratio=10.0" \
+stopped disk_aspect_10_coarse 1 '(disk 0.73 cells thin on this grid) is not allowed; allowed: a body at least 4 cells thick for the immersed boundary: &grid nx = ny = nz >= 177' "pair.shape='disk'" "pair.aspect_ratio=10.0" \
   "pair.radius=20.0e-6" "grid.length_x=0.38e-3" "grid.length_y=0.38e-3" "grid.length_z=0.38e-3" \
   "pair.centre_position=0.19e-3,0.19e-3,0.19e-3"
 
