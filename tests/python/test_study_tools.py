@@ -448,7 +448,7 @@ def test_study_slurm_scripts_and_forced_field_dependency(spaced_tmp):
     work.mkdir()
     (work / "input").symlink_to(REPO / "input")
     result = run_tool([REPO / "tools" / "speed-accuracy-study.sh", "--slurm", "-o", out, "-N", "2",
-                       "--shapes", "disk", "--knobs", "grid", "--runs-256", "0",
+                       "--shapes", "needle", "--knobs", "grid", "--runs-256", "0",
                        "--sbatch-option", "--partition=short"], cwd=work)
     assert result.returncode == 0, result.stderr + result.stdout
     submit = (out / "submit-all.sh").read_text()
@@ -469,14 +469,14 @@ def test_study_slurm_scripts_and_forced_field_dependency(spaced_tmp):
     assert "field_128_on_96=$(sbatch --parsable --dependency=afterok:$field_128 " in submit
     assert "field_128_on_192=$(sbatch --parsable --dependency=afterok:$field_128 " in submit
     # Each grid batch waits for its own field; the batch script is montecarlo.sh's.
-    assert "--dependency=afterok:$field_128_on_96" in submit and "disk-grid96/montecarlo.sbatch" in submit
-    assert submit.index("field_128=") < submit.index("field_128_on_96=") < submit.index("disk-grid96/montecarlo")
-    base_line = next(line for line in submit.splitlines() if "disk-base/montecarlo.sbatch" in line)
+    assert "--dependency=afterok:$field_128_on_96" in submit and "needle-grid96/montecarlo.sbatch" in submit
+    assert submit.index("field_128=") < submit.index("field_128_on_96=") < submit.index("needle-grid96/montecarlo")
+    base_line = next(line for line in submit.splitlines() if "needle-base/montecarlo.sbatch" in line)
     assert "--dependency=afterok:$field_128 " in base_line
-    batch = (out / "disk-grid96" / "montecarlo.sbatch").read_text()
+    batch = (out / "needle-grid96" / "montecarlo.sbatch").read_text()
     assert "#SBATCH --array=1-2" in batch and "#SBATCH --ntasks=2" in batch
     assert "#SBATCH --partition=short" in batch
-    assert "output/hit_box_128_on_96/final_field.h5" in (out / "disk-grid96" / "batch.nml").read_text()
+    assert "output/hit_box_128_on_96/final_field.h5" in (out / "needle-grid96" / "batch.nml").read_text()
     manifest = read_csv(out / "manifest.tsv", "\t")
     assert [(row["variant"], row["reference"]) for row in manifest] == [
         ("grid96", "grid192"), ("base", "grid192"), ("grid192", "grid192")]
@@ -491,21 +491,21 @@ def test_study_regrids_an_existing_base_field_at_once(spaced_tmp):
     (work / "input").symlink_to(REPO / "input")
     field = solenoidal_random_field((8, 8, 8), box=(1.0e-3, 1.0e-3, 1.0e-3))
     write_final_field(work / "output" / "hit_box_128" / "final_field.h5", field)
-    command = [REPO / "tools" / "speed-accuracy-study.sh", "-o", out, "-N", "2", "--shapes", "disk",
+    command = [REPO / "tools" / "speed-accuracy-study.sh", "-o", out, "-N", "2", "--shapes", "needle",
                "--knobs", "grid", "--runs-256", "0"]
     listed = run_tool(command + ["--list"], cwd=work)
     assert listed.returncode == 0, listed.stderr
     assert ("regridded field output/hit_box_128_on_96/final_field.h5: MISSING (tools/regrid_field.py: "
             "output/hit_box_128/final_field.h5 resampled onto 96^3, made first)") in listed.stdout
     assert "forced field output/hit_box_128/final_field.h5: present" in listed.stdout
-    result = run_tool(command + ["--slurm", "--only", "^disk-grid96$"], cwd=work)
+    result = run_tool(command + ["--slurm", "--only", "^needle-grid96$"], cwd=work)
     assert result.returncode == 0, result.stderr + result.stdout
     regridded = work / "output" / "hit_box_128_on_96" / "final_field.h5"
     with h5py.File(regridded, "r") as handle:
         assert list(handle["fluid/grid_shape"][()]) == [96, 96, 96]
         assert list(handle["forcing/state"][()]) == list(field["forcing_state"])
     submit = (out / "submit-all.sh").read_text()
-    assert "dependency" not in submit and "disk-grid96/montecarlo.sbatch" in submit
+    assert "dependency" not in submit and "needle-grid96/montecarlo.sbatch" in submit
     assert not list((out / "slurm").glob("*.sbatch"))
     times = read_csv(out / "batch_times.tsv", "\t")
     assert [(row["batch"], row["status"]) for row in times] == [("regrid_field_hit_box_128_on_96", "0")]
@@ -607,12 +607,12 @@ def test_study_without_a_usable_base_field_schedules_no_grid_batch(spaced_tmp):
     (work / "output" / "hit_box_128").mkdir(parents=True)
     (work / "input").symlink_to(REPO / "input")
     (work / "output" / "hit_box_128" / "final_field.h5").write_text("not a field\n")
-    result = run_tool([REPO / "tools" / "speed-accuracy-study.sh", "-o", out, "-N", "2", "--shapes", "disk",
+    result = run_tool([REPO / "tools" / "speed-accuracy-study.sh", "-o", out, "-N", "2", "--shapes", "needle",
                        "--knobs", "grid", "--runs-256", "0", "--slurm", "--only", "grid96"], cwd=work)
     assert result.returncode == 1, result.stderr + result.stdout
     assert "regridded field output/hit_box_128_on_96/final_field.h5 failed" in result.stderr
     assert "not an HDF5 file" in (out / "regrid_field_hit_box_128_on_96.log").read_text()
-    assert not (out / "disk-grid96" / "montecarlo.sbatch").exists()
+    assert not (out / "needle-grid96" / "montecarlo.sbatch").exists()
     assert not (work / "output" / "hit_box_128_on_96").exists()
 
 
