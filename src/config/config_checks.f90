@@ -60,6 +60,8 @@ contains
     end select
   end subroutine check_bodies_thick_enough
 
+  !> One body (semi-axes [a, b], m) against the largest grid spacing of &grid; the error names the
+  !> deck variable that gave it and the smallest cubic grid that holds it.
   subroutine require_thick_enough(group, variable, radius, shape, semi_axes, cfg)
     character(len=*), intent(in) :: group, variable, shape
     real(wp), intent(in) :: radius, semi_axes(2)
@@ -283,8 +285,8 @@ contains
   !> min_gap under half the smallest box length (the minimum-image convention of the pairs); the
   !> nanometre-scale model lengths far below the smallest body (the Derjaguin limit, as for the
   !> pair); min_gap above the collision detection floor (a body placed inside the detection distance
-  !> would collide at the first step) (the thickness the immersed boundary needs:
-  !> check_bodies_thick_enough).
+  !> would collide at the first step). The thickness the immersed boundary needs is checked with the
+  !> other bodies' (check_bodies_thick_enough).
   subroutine check_suspension_cross(cfg)
     type(agglo_config_t), intent(in) :: cfg
     real(wp) :: axes(2), smallest_box, smallest_radius
