@@ -36,6 +36,10 @@ Options:
                          with --slurm "srun"); called as CMD -n R AGGLO DECK
       --time MINUTES     wall-time limit of one run: locally the run is stopped and recorded as
                          failed; with --slurm the array task's --time (default there: 60)
+      --min-free MIB     start a run only while the file system of ROOT has at least MIB MiB free
+                         (default 1024; 0: no check): a full disk fails every run that writes;
+                         with less, the runs in flight finish and the call ends (exit status 1),
+                         to be called again once there is room
       --slurm            write ROOT/montecarlo.sbatch (one array task per incomplete run) and stop;
                          submit it with: sbatch ROOT/montecarlo.sbatch
       --sbatch-option O  extra "#SBATCH O" line, e.g. --sbatch-option --partition=short (repeatable)
@@ -143,7 +147,7 @@ format_seconds() { # milliseconds -> "0.4s", "12s", "3m05s", "2h10m"
 # Arguments
 # ---------------------------------------------------------------------------------------------
 deck='' runs='' base_seed='' root='' jobs=1 jobs_given=0 ranks=1 agglo=${AGGLO:-} launcher=''
-time_limit='' slurm=0 status_only=0 first_run=1
+time_limit='' slurm=0 status_only=0 first_run=1 min_free=1024
 declare -a sbatch_options=() user_sets=() set_arguments=()
 need_value() { [[ $# -ge 2 ]] || die "option $1 needs a value (see --help)"; }
 while [[ $# -gt 0 ]]; do
@@ -159,6 +163,7 @@ while [[ $# -gt 0 ]]; do
     --agglo) need_value "$@"; agglo=$2; shift ;;
     --launcher) need_value "$@"; launcher=$2; shift ;;
     --time) need_value "$@"; time_limit=$2; shift ;;
+    --min-free) need_value "$@"; min_free=$2; shift ;;
     --slurm) slurm=1 ;;
     --sbatch-option) need_value "$@"; sbatch_options+=("$2"); shift ;;
     --status) status_only=1 ;;
@@ -177,6 +182,7 @@ done
 if [[ -n $time_limit ]]; then
   [[ $time_limit =~ ^[1-9][0-9]*$ ]] || die "--time '$time_limit' is not allowed; allowed: whole minutes >= 1"
 fi
+[[ $min_free =~ ^[0-9]+$ ]] || die "--min-free '$min_free' is not allowed; allowed: whole MiB >= 0 (0: no check)"
 (( runs <= 99999 )) || die "--runs $runs is not allowed; allowed: at most 99999"
 [[ $first_run =~ ^[1-9][0-9]*$ ]] && (( first_run <= runs )) || \
   die "--from-run '$first_run' is not allowed; allowed: an integer from 1 to --runs ($runs)"
@@ -389,6 +395,22 @@ progress() { # message about the run that just ended
   say "$1 | done $done_ok, failed $done_failed, running ${#running_run[@]}, remaining $remaining | elapsed $(format_seconds $(($(now_ms) - batch_start))), ETA $eta"
 }
 
+free_mib() { df -Pk -- "$root" 2>/dev/null | awk 'NR == 2 { print int($4 / 1024) }'; }   # free MiB of ROOT's file system
+
+# Whether the next run may start: ROOT's file system has --min-free MiB; said once when it has not.
+space_low=0
+room_for_a_run() {
+  (( min_free == 0 || space_low )) && return $(( space_low ))
+  local free
+  free=$(free_mib)
+  [[ $free =~ ^[0-9]+$ ]] || return 0           # df could not tell: do not stop a batch for it
+  (( free >= min_free )) && return 0
+  space_low=1
+  say "only $free MiB free on the file system of $root (--min-free $min_free): no further run starts;" \
+      "the runs in flight finish"
+  return 1
+}
+
 stop_if_interrupted() { # after INT or TERM: stop the runs in flight (they stay incomplete) and leave
   (( interrupted )) || return 0
   local pid
@@ -398,8 +420,8 @@ stop_if_interrupted() { # after INT or TERM: stop the runs in flight (they stay 
   exit 130
 }
 
-while (( next < total || ${#running_run[@]} > 0 )); do
-  while (( ! interrupted && next < total && ${#running_run[@]} < jobs )); do
+while (( (next < total && ! space_low) || ${#running_run[@]} > 0 )); do
+  while (( ! interrupted && next < total && ${#running_run[@]} < jobs )) && room_for_a_run; do
     start_run "${pending[next]}"; next=$((next + 1))
   done
   (( ${#running_run[@]} == 0 )) && continue
@@ -441,4 +463,5 @@ if (( complete == runs - first_run + 1 )); then
   exit 0
 fi
 say "batch $root: $complete of $((runs - first_run + 1)) runs complete$(runs_kept_elsewhere); ${#failed_runs[@]} failed (listed in $root/failed.txt); call the same command again to rerun them"
+(( space_low )) && say "$((total - next)) run(s) not started for want of free space (--min-free $min_free MiB): free some, then call the same command again"
 exit 1

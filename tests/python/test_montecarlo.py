@@ -90,7 +90,8 @@ def resolved_value(run_nml, variable):
 def test_help_describes_the_interface():
     result = run_tool([MONTECARLO, "--help"])
     assert result.returncode == 0
-    for option in ("--deck", "--runs", "--seed", "--out", "--jobs", "--ranks", "--slurm", "--time", "Resume"):
+    for option in ("--deck", "--runs", "--seed", "--out", "--jobs", "--ranks", "--slurm", "--time", "--min-free",
+                   "Resume"):
         assert option in result.stdout, option
 
 
@@ -106,6 +107,8 @@ def test_bad_arguments_are_refused(agglo, spaced_tmp):
     result = montecarlo(agglo, deck, "2", "1", spaced_tmp / "root", "--from-run", "3")
     assert result.returncode == 2 and "--from-run '3' is not allowed; allowed: an integer from 1 to --runs (2)" \
         in result.stderr
+    result = montecarlo(agglo, deck, "2", "1", spaced_tmp / "root", "--min-free", "-1")
+    assert result.returncode == 2 and "--min-free '-1' is not allowed; allowed: whole MiB >= 0" in result.stderr
     (spaced_tmp / "unrelated").mkdir()
     (spaced_tmp / "unrelated" / "notes.txt").write_text("x")
     result = montecarlo(agglo, deck, "2", "1", spaced_tmp / "unrelated")
@@ -223,6 +226,22 @@ def test_from_run_runs_only_the_later_runs(pair_scene, spaced_tmp):
     assert status.returncode == 0 and "1 complete, 0 failed, 0 not run" in status.stdout
     status = montecarlo(agglo, pair_deck, "3", "40", root, "--status")   # all three: two not run
     assert status.returncode == 1 and "1 complete, 0 failed, 2 not run" in status.stdout
+
+
+def test_no_run_starts_without_free_space(pair_scene, spaced_tmp):
+    """--min-free above what any file system has (2^40 MiB): no run starts (a full disk would fail
+    every run as it writes), the call says why and ends with status 1; called again with room, the
+    batch completes."""
+    agglo, pair_deck = pair_scene
+    root = spaced_tmp / "no room"
+    result = montecarlo(agglo, pair_deck, "2", "7", root, "-j", "2", "--min-free", str(2**40))
+    assert result.returncode == 1, result.stdout + result.stderr
+    assert "MiB free on the file system of" in result.stdout and "no further run starts" in result.stdout
+    assert "2 run(s) not started for want of free space (--min-free 1099511627776 MiB)" in result.stdout
+    assert complete_runs(str(root), 2) == set() and not (root / "run_0001").exists()
+    result = montecarlo(agglo, pair_deck, "2", "7", root, "-j", "2")
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert complete_runs(str(root), 2) == {1, 2}
 
 
 def test_resume_after_the_batch_is_killed_mid_way(pair_scene, spaced_tmp):
