@@ -129,7 +129,7 @@ table_matches() {
   local name=$1 table="$tables/$1.csv" text fluid nx field; shift
   [ -n "$tables" ] && [ -f "$table" ] && [ -f "$tables/$name.nml" ] || return 1
   [ "$(awk -F, 'NR == 2 { print $2 }' "$table")" = "$study_seed" ] || return 1
-  text=$("${AGGLO:-$study_repo/build/agglo}" "$@" --print-deck 2> /dev/null < /dev/null) || return 1
+  text=$(study_agglo "$@" --print-deck 2> /dev/null) || return 1
   printf '%s\n' "$text" | cmp -s - "$tables/$name.nml" || return 1
   read -r fluid nx field <<< "$(study_deck_info "$@")"
   if [ -n "$field" ]; then table_field_matches || return 1; fi
@@ -173,8 +173,7 @@ variant() {
     # A variant the code refuses for this shape (the disk, 4.4 cells thick at 128^3, is 3.3 at 96^3:
     # too thin for the immersed boundary) is left out of the study, with the code's reason.
     local refusal
-    if ! refusal=$("${AGGLO:-$study_repo/build/agglo}" "${deck//SHAPE/$shape}" "${sets[@]}" --print-deck \
-                   2>&1 > /dev/null < /dev/null); then
+    if ! refusal=$(study_agglo "${deck//SHAPE/$shape}" "${sets[@]}" --print-deck 2>&1 > /dev/null); then
       [ -n "${declared[$shape-$name]+x}" ] && continue
       declared[$shape-$name]=1
       echo "batch $shape-$name: not run: the code refuses its deck: $(grep -m1 -o 'deck: .*' <<< "$refusal")"

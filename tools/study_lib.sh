@@ -245,6 +245,10 @@ study_regridded_field() {
   fi
 }
 
+# study_agglo ARGS...: the code as the study scripts check decks with it ($AGGLO, else this
+# repository's build), standard input closed.
+study_agglo() { "${AGGLO:-$study_repo/build/agglo}" "$@" < /dev/null; }
+
 study_time_row() {  # batch runs jobs runs_run wall status
   [ -f "$study_times" ] || printf 'batch\truns\tjobs\truns_run_by_this_call\twall_seconds\tstatus\tdate\n' > "$study_times"
   printf '%s\t%s\t%s\t%s\t%.1f\t%s\t%s\n' "$1" "$2" "$3" "$4" "$5" "$6" "$(date -Iseconds)" >> "$study_times"
@@ -323,7 +327,7 @@ study_batch() {
 study_reuse_runs() {
   local root=$1 runs=$2 deck=$3 source_root conf text i run linked=0; shift 3
   (( ${#study_reuse_dirs[@]} )) || return 0
-  text=$("${AGGLO:-$study_repo/build/agglo}" "$deck" "$@" --print-deck 2> /dev/null < /dev/null) || return 0
+  text=$(study_agglo "$deck" "$@" --print-deck 2> /dev/null) || return 0
   text+=$'\n'
   local -a confs=()
   for source_root in "${study_reuse_dirs[@]}"; do
