@@ -4,7 +4,7 @@
 !> resolved scene without bodies); the fluid is sampled at the bodies' centres before and after it,
 !> and the sub-steps read it interpolated linearly in time between u^n and u^n+1.
 module point_hydrodynamics
-  use agglo_kinds, only: wp
+  use agglo_kinds, only: wp, i8
   use fluid_solver, only: fluid_solver_t
   use forcing_driver, only: forcing_driver_t, forced_fluid_advance
   use particle_system, only: particle_system_t, particle_loads_t, wrap_body
@@ -13,6 +13,7 @@ module point_hydrodynamics
   use particle_hydrodynamics, only: particle_hydrodynamics_t
   use rigid_body, only: added_inertia_t
   use timer_registry, only: timer_tic, timer_toc
+  use shared_work, only: rank_block, share_columns
   implicit none
   private
   public :: point_hydrodynamics_t, point_hydrodynamics_create
@@ -111,16 +112,35 @@ contains
   end subroutine point_member_loads
 
   !> The listed bodies over the whole last fluid step dt in one exact exponential update
-  !> (point_free_step), positions wrapped into the box.
+  !> (point_free_step), positions wrapped into the box. Each rank updates its block of the list
+  !> (shared_work) and the new states are gathered: every rank holds what one rank would compute.
   subroutine point_single_step(self, system, bodies, dt)
     class(point_hydrodynamics_t), intent(in) :: self
     type(particle_system_t), intent(inout) :: system
     integer, intent(in) :: bodies(:)
     real(wp), intent(in) :: dt
-    integer :: k
+    integer, parameter :: state_size = 16
+    real(wp), allocatable :: states(:, :)
+    integer :: k, i, first, last
+    call rank_block(size(bodies), first, last)
+    allocate(states(state_size, size(bodies)))
+    do k = first, last
+      i = bodies(k)
+      call point_free_step(self%coupling, i, system%bodies(i), dt)
+      call wrap_body(system, i)
+      ! The wrap counts are small integers, exact in real(wp).
+      states(:, k) = [system%bodies(i)%position, system%bodies(i)%velocity, system%bodies(i)%quaternion, &
+                      system%bodies(i)%angular_velocity_body, real(system%wraps(:, i), wp)]
+    end do
+    call share_columns(states)
     do k = 1, size(bodies)
-      call point_free_step(self%coupling, bodies(k), system%bodies(bodies(k)), dt)
-      call wrap_body(system, bodies(k))
+      if (k >= first .and. k <= last) cycle
+      i = bodies(k)
+      system%bodies(i)%position = states(1:3, k)
+      system%bodies(i)%velocity = states(4:6, k)
+      system%bodies(i)%quaternion = states(7:10, k)
+      system%bodies(i)%angular_velocity_body = states(11:13, k)
+      system%wraps(:, i) = nint(states(14:16, k), i8)
     end do
   end subroutine point_single_step
 

@@ -32,7 +32,7 @@ module point_particle_coupling
   use stokes_resistance, only: stokes_resistance_t, stokes_resistance_of, stokes_loads_lab, &
                                spheroid_added_mass_coefficients
   use fluid_grid, only: fluid_grid_t
-  use field_interpolation, only: velocity_and_gradient_at_points
+  use field_interpolation, only: velocity_and_gradient_at_points, sampling_order
   implicit none
   private
   public :: point_coupling_t, point_fluid_t, point_coupling_create, point_coupling_sample, point_fluid_at, &
@@ -57,6 +57,7 @@ module point_particle_coupling
     real(wp) :: box_length(3) = 0.0_wp                !< m, the fluid's periodic box
     real(wp) :: dt = 0.0_wp                           !< s, the fluid step the samples span
     real(wp), allocatable :: anchor(:, :)             !< (3, n) m, centres where the fluid was sampled
+    integer, allocatable :: visit(:)                  !< the anchors this rank samples, in cell order (sampling_order)
     real(wp), allocatable :: velocity(:, :, :)        !< (3, n, 2) m/s at the anchors, u^n and u^{n+1}
     real(wp), allocatable :: gradient(:, :, :, :)     !< (3, 3, n, 2) 1/s, d u_a / d x_b, G^n and G^{n+1}
   end type point_coupling_t
@@ -105,61 +106,32 @@ contains
       do i = 1, coupling%n
         coupling%anchor(:, i) = bodies(i)%position
       end do
+      ! Both samples of a fluid step are taken at these anchors: one order for the two.
+      call sampling_order(grid, coupling%anchor, coupling%visit)
     else
       if (.not. present(dt)) call fatal('point_coupling_sample: the end sample needs the fluid step dt')
       if (.not. (dt > 0.0_wp)) call fatal('point_coupling_sample: the fluid step must be > 0')
+      if (.not. allocated(coupling%visit)) call fatal('point_coupling_sample: the end sample needs the start sample')
       coupling%dt = dt
     end if
-    call sample_velocity(grid, u, v, w, coupling%anchor, coupling%velocity(:, :, which), &
-                         coupling%gradient(:, :, :, which))
+    call velocity_and_gradient_at_points(grid, u, v, w, coupling%anchor, coupling%velocity(:, :, which), &
+                                         coupling%gradient(:, :, :, which), coupling%visit)
   end subroutine point_coupling_sample
 
   !> The velocity and its gradient G(a, b) = d u_a / d x_b at points (m), on every rank
   !> (collective; u, v, w with current halos): field_interpolation's trilinear value and centred
-  !> gradient, which give the same result on any number of ranks. The points are visited in the
-  !> order of their grid rows (row_order), so that the stencils of consecutive points share cache
-  !> lines; each point's arithmetic is that of any order.
+  !> gradient, which give the same result on any number of ranks, the points visited in the order
+  !> of their grid cells (sampling_order).
   subroutine sample_velocity(grid, u, v, w, points, velocity, gradient)
     type(fluid_grid_t), intent(in) :: grid
     real(wp), intent(in) :: u(0:, 0:, 0:), v(0:, 0:, 0:), w(0:, 0:, 0:)
     real(wp), intent(in) :: points(:, :)            !< (3, n)
     real(wp), intent(out) :: velocity(:, :)         !< (3, n) m/s
     real(wp), intent(out) :: gradient(:, :, :)      !< (3, 3, n) 1/s
-    real(wp), allocatable :: sorted(:, :), sorted_velocity(:, :), sorted_gradient(:, :, :)
-    integer, allocatable :: order(:)
-    allocate(order(size(points, 2)), sorted_velocity(3, size(points, 2)), sorted_gradient(3, 3, size(points, 2)))
-    call row_order(grid, points, order)
-    sorted = points(:, order)
-    call velocity_and_gradient_at_points(grid, u, v, w, sorted, sorted_velocity, sorted_gradient)
-    velocity(:, order) = sorted_velocity
-    gradient(:, :, order) = sorted_gradient
+    integer, allocatable :: visit(:)
+    call sampling_order(grid, points, visit)
+    call velocity_and_gradient_at_points(grid, u, v, w, points, velocity, gradient, visit)
   end subroutine sample_velocity
-
-  !> The points ordered by their grid row (the z plane, then the y row, of the cell that holds
-  !> them; in the input order within a row): a counting sort, O(n + nz ny).
-  subroutine row_order(grid, points, order)
-    type(fluid_grid_t), intent(in) :: grid
-    real(wp), intent(in) :: points(:, :)
-    integer, intent(out) :: order(:)
-    integer, allocatable :: row(:), first(:)
-    integer :: p, j, k, r
-    allocate(row(size(points, 2)), first(grid%ny * grid%nz + 1))
-    first = 0
-    do p = 1, size(points, 2)
-      j = min(grid%ny - 1, max(0, floor(modulo(points(2, p), grid%ly) / grid%dy)))
-      k = min(grid%nz - 1, max(0, floor(modulo(points(3, p), grid%lz) / grid%dz)))
-      row(p) = 1 + j + grid%ny * k
-      first(row(p) + 1) = first(row(p) + 1) + 1
-    end do
-    first(1) = 1
-    do r = 2, size(first)
-      first(r) = first(r) + first(r - 1)
-    end do
-    do p = 1, size(points, 2)
-      order(first(row(p))) = p
-      first(row(p)) = first(row(p)) + 1
-    end do
-  end subroutine row_order
 
   !> The undisturbed flow at position (m) at the fraction theta in [0, 1] of the sampled fluid step,
   !> for body i (module header). Without an end sample (dt = 0) the start sample is frozen.

@@ -102,14 +102,24 @@ contains
 
   !> The near pairs of bodies at positions (3, n) with bounding radii (n), periods box_length
   !> (0 = unbounded direction) and gap (m): finder%first(1:finder%count), finder%second(...).
-  subroutine broad_phase_find(finder, positions, radii, box_length, gap)
+  !> With share = [i0, stride], only the pairs whose first body is i0, i0 + stride, ... (a rank's
+  !> share of the search: shared_work, rank_stride); the cells hold every body all the same.
+  subroutine broad_phase_find(finder, positions, radii, box_length, gap, share)
     type(broad_phase_t), intent(inout) :: finder
     real(wp), intent(in) :: positions(:,:), radii(:), box_length(3), gap
+    integer, intent(in), optional :: share(2)
     real(wp) :: width_min, origin(3), extent(3), width(3), scale, total
     integer :: n, k, i, j, c, ncells, count_i, offsets(3, 3), noffsets(3), a, b, d, cell(3)
     integer :: neighbour_cells(27), nneighbours, m, linear_offsets(27), nlinear
     logical :: inside
+    integer :: first_body, stride
     n = size(radii)
+    first_body = 1
+    stride = 1
+    if (present(share)) then
+      first_body = share(1)
+      stride = share(2)
+    end if
     finder%count = 0
     finder%tests = 0_i8
     finder%cells = 1
@@ -191,7 +201,7 @@ contains
         end do
       end do
     end if
-    do i = 1, n - 1
+    do i = first_body, n - 1, stride
       ! The distinct neighbour cells of body i's cell.
       nneighbours = 0
       if (nlinear == 27) then

@@ -12,8 +12,11 @@
 !> with the gap g0 + safety dt 2 max_i s_i, s_i = max(|U_i|, |u_i^n|, |u_i^n+1|), an upper bound of
 !> every s_ij. The bound is checked after the step: a pair within g0 at the start of the next step
 !> with a body that took the one-step update is a miss (counted; zero in every run measured).
+!> On several ranks each searches the pairs whose first body is its by stride (shared_work) and the
+!> members, pairs and misses are combined over the ranks: the same as one rank's search.
 module near_bodies
   use agglo_kinds, only: wp, i8
+  use shared_work, only: rank_stride, any_of_ranks, sum_of_ranks
   use broad_phase, only: broad_phase_t, broad_phase_find
   use particle_system, only: particle_system_t
   use periodic_box, only: minimum_image
@@ -45,7 +48,8 @@ contains
     real(wp), intent(in) :: fluid_start(:,:), fluid_end(:,:), dt, g0
     real(wp) :: relative, gap
     logical, allocatable :: member(:)
-    integer :: n, i, j, p, single
+    integer :: n, i, j, p, single, near_pairs
+    integer(i8) :: misses
     n = system%n
     if (.not. allocated(near%members)) then
       allocate(near%members(n), near%single(n), near%was_single(n), near%positions(3, n), near%speed(n))
@@ -56,22 +60,26 @@ contains
       near%speed(i) = max(norm2(system%bodies(i)%velocity), norm2(fluid_start(:, i)), norm2(fluid_end(:, i)))
     end do
     call broad_phase_find(near%finder, near%positions, system%bounding_radii, system%box_length, &
-                          g0 + safety * dt * 2.0_wp * maxval(near%speed))
+                          g0 + safety * dt * 2.0_wp * maxval(near%speed), share=rank_stride())
     allocate(member(n))
     member = .false.
-    near%near_pairs = 0
+    near_pairs = 0
+    misses = 0_i8
     do p = 1, near%finder%count
       i = near%finder%first(p)
       j = near%finder%second(p)
       gap = bounding_gap(system, i, j)
-      if (gap <= g0 .and. (near%was_single(i) .or. near%was_single(j))) near%misses = near%misses + 1_i8
+      if (gap <= g0 .and. (near%was_single(i) .or. near%was_single(j))) misses = misses + 1_i8
       relative = max(norm2(system%bodies(j)%velocity - system%bodies(i)%velocity), &
                      norm2(fluid_start(:, j) - fluid_start(:, i)), norm2(fluid_end(:, j) - fluid_end(:, i)))
       if (gap > g0 + safety * dt * relative) cycle
-      near%near_pairs = near%near_pairs + 1
+      near_pairs = near_pairs + 1
       member(i) = .true.
       member(j) = .true.
     end do
+    call any_of_ranks(member)
+    near%near_pairs = sum_of_ranks(near_pairs)
+    near%misses = near%misses + sum_of_ranks(misses)
     near%count = 0
     single = 0
     do i = 1, n

@@ -1,5 +1,5 @@
 ! ranks: 2
-! checks: 34
+! checks: 37
 !> Interpolation of grid fields to points (field_interpolation) on 2 ranks, for the three
 !> staggered velocity grids and the cell centres:
 !> - a trilinear field is interpolated exactly, with its exact gradient, at points anywhere in z
@@ -13,16 +13,22 @@
 !>   interpolation that is the centred node differences interpolated linearly, the same nodes and
 !>   weights whichever rank evaluates them. It checks that no rank extrapolates near its slab's
 !>   lower boundary (d/dz of w there needs the rank below): the gradient does not depend on the
-!>   number of ranks.
+!>   number of ranks;
+!> - the point coupling's path (velocity_and_gradient_at_points with the visiting order of
+!>   sampling_order): each rank's list in the order of the points' grid cells (z plane, y row, x),
+!>   every point in some rank's list, and the 12 values per point those of interpolate_at_points
+!>   and velocity_gradient_at_points to round-off.
 program test_field_interpolation
   use agglo_kinds, only: wp, i8
   use random_stream, only: random_stream_t, stream_seed, stream_uniform
   use physical_constants, only: two_pi
   use parallel_env, only: parallel_start, is_root
   use fluid_grid, only: fluid_grid_t, grid_create, allocate_field, exchange_halos
+  use mpi_f08, only: MPI_Allreduce, MPI_IN_PLACE, MPI_INTEGER, MPI_SUM, MPI_MIN, MPI_COMM_WORLD
   use field_interpolation, only: on_x_faces, on_y_faces, on_z_faces, on_cell_centres, interpolate_at_points, &
-                                 gradient_at_points, velocity_gradient_at_points
-  use test_framework, only: test_start, test_finish, check_below, check_above
+                                 gradient_at_points, velocity_gradient_at_points, velocity_and_gradient_at_points, &
+                                 sampling_order
+  use test_framework, only: test_start, test_finish, check, check_below, check_above
   implicit none
   real(wp), parameter :: lx = 1.0_wp, ly = 0.5_wp, lz = 2.0_wp
   character(len=12), parameter :: names(4) = [character(len=12) :: 'x_faces', 'y_faces', 'z_faces', 'cell_centres']
@@ -56,6 +62,7 @@ program test_field_interpolation
   if (is_root()) write(*, '(a,3es11.3)') '  velocity gradient tensor rms error 16,32,64:', velocity_gradient_errors
   call check_above(order(velocity_gradient_errors(1:2)), 1.8_wp, 'velocity_gradient_order_16_32')
   call check_above(order(velocity_gradient_errors(2:3)), 1.8_wp, 'velocity_gradient_order_32_64')
+  call check_sampling_order()
   call test_finish()
 
 contains
@@ -266,4 +273,53 @@ contains
     end do
     velocity_gradient_error = sqrt(velocity_gradient_error / size(points, 2))
   end subroutine smooth_errors
+  !> The point coupling's sampling (module header, last item) on the smooth fields at 16^3.
+  subroutine check_sampling_order()
+    type(fluid_grid_t) :: grid
+    real(wp), allocatable :: fields(:, :, :, :), values(:, :), tensor(:, :, :), velocity(:, :), gradients(:, :, :)
+    integer, allocatable :: visit(:), seen(:), key(:)
+    integer :: location, i, j, k, m, ordered
+    real(wp) :: difference, largest
+    call grid_create(grid, 16, 16, 16, lx, ly, lz)
+    allocate(fields(0:17, 0:17, 0:grid%nz_local + 1, 3), values(3, size(points, 2)), tensor(3, 3, size(points, 2)))
+    allocate(velocity(3, size(points, 2)), gradients(3, 3, size(points, 2)))
+    do location = 1, 3
+      do k = 1, grid%nz_local
+        do j = 1, 16
+          do i = 1, 16
+            fields(i, j, k, location) = smooth(location, node_position(grid, location, i, j, grid%z_offset + k))
+          end do
+        end do
+      end do
+      call exchange_halos(grid, fields(:, :, :, location))
+      call interpolate_at_points(grid, fields(:, :, :, location), location, points, values(location, :))
+    end do
+    call velocity_gradient_at_points(grid, fields(:, :, :, 1), fields(:, :, :, 2), fields(:, :, :, 3), points, tensor)
+    call sampling_order(grid, points, visit)
+    call velocity_and_gradient_at_points(grid, fields(:, :, :, 1), fields(:, :, :, 2), fields(:, :, :, 3), points, &
+                                         velocity, gradients, visit)
+    ! The order: cell keys (z, y, x) never decrease along this rank's list; no point twice.
+    allocate(key(size(visit)), seen(size(points, 2)))
+    do m = 1, size(visit)
+      key(m) = cell(points(1, visit(m)), lx, 16) + 16 * (cell(points(2, visit(m)), ly, 16) &
+               + 16 * cell(points(3, visit(m)), lz, 16))
+    end do
+    ordered = merge(1, 0, all(key(2:) >= key(:size(key) - 1)))
+    seen = 0
+    seen(visit) = 1
+    ordered = merge(ordered, 0, sum(seen) == size(visit) .and. size(visit) > 0)
+    call MPI_Allreduce(MPI_IN_PLACE, ordered, 1, MPI_INTEGER, MPI_MIN, MPI_COMM_WORLD)
+    call MPI_Allreduce(MPI_IN_PLACE, seen, size(seen), MPI_INTEGER, MPI_SUM, MPI_COMM_WORLD)
+    call check(ordered == 1, 'sampling_order_in_cell_order_no_point_twice')
+    call check(all(seen >= 1), 'sampling_order_every_point_on_some_rank')
+    difference = max(maxval(abs(velocity - values)) / maxval(abs(values)), maxval(abs(gradients - tensor)) / maxval(abs(tensor)))
+    call check_below(difference, 1.0e-13_wp, 'sampled_velocity_and_gradient_as_the_separate_routines')
+  end subroutine check_sampling_order
+
+  !> 0-based cell of coordinate x (wrapped into the period) of n cells.
+  integer function cell(x, length, n)
+    real(wp), intent(in) :: x, length
+    integer, intent(in) :: n
+    cell = min(n - 1, int(modulo(x, length) / (length / n)))
+  end function cell
 end program test_field_interpolation

@@ -20,14 +20,15 @@
 #    sub-steps' own error against the exact relaxation, and the orientation and gradient the
 #    one-step update holds over the step), no miss logged; 2 fluid steps + &run restart to 4 give
 #    the 4-step particles.h5 and checkpoint bit for bit (the near bodies are found again from the
-#    restored state);
+#    restored state); on 2 ranks (the search and the one-step update shared out) the same sub-step
+#    members as on 1, the bodies within 1e-9 relative, and the 2 + 2-step restart bit for bit;
 #  - ghost mode (&suspension ghost): 191 spheres at 10%, 20 mm/s rms, 4000 steps: every body's
 #    velocity unchanged (bit for bit: no impulse, no DLVO), so the momentum is the start's; bodies
 #    pass through each other (a negative gap logged); the collisions counted are exactly the
 #    encounters an independent count finds on the straight-line trajectories x0 + v t (each pair's
 #    steps with 0 <= gap < v_n dt at the minimum image, v_n the normal approach speed), pair by pair.
 # Prints PASS/FAIL lines; works in a temporary directory.
-# checks: 10
+# checks: 12
 set -u
 AGGLO=${AGGLO:?AGGLO must be the agglo executable}
 root=$(cd "$(dirname "$0")/../.." && pwd)
@@ -135,6 +136,32 @@ if h5diff -q near/particles.h5 nearsplit/particles.h5 && \
    h5diff -q near/checkpoints/checkpoint_0000000004.h5 nearsplit/checkpoints/checkpoint_0000000004.h5; then
   echo "PASS suspension/point_near_restart_bit_for_bit  (2 + 2 fluid steps: particles.h5 and the last checkpoint)"
 else echo "FAIL suspension/point_near_restart_bit_for_bit: $(grep -m1 error near2.out)"; fi
+
+# 'near' on 2 ranks: the search by stride and the one-step update by block (shared_work) give the
+# 1-rank run's members (the log's sub-step lines) and, to the round-off of the field's sums over
+# the slabs, its bodies; a 2 + 2-step restart on 2 ranks is bit for bit.
+mpirun -np 2 "$AGGLO" point.nml --set "output.directory='neartwo'" --set "scene.substep_bodies='near'" > neartwo.out 2>&1
+mpirun -np 2 "$AGGLO" point.nml --set "output.directory='neartwosplit'" --set "scene.substep_bodies='near'" \
+  --set run.max_steps=2 > neartwo1.out 2>&1
+mpirun -np 2 "$AGGLO" point.nml --set "output.directory='neartwosplit'" --set "scene.substep_bodies='near'" \
+  --set run.restart=.true. > neartwo2.out 2>&1
+"$python" - "$(grep -c 'sub-steps: ' near.out)" "$(diff <(grep -o 'sub-steps: .*' near.out) <(grep -o 'sub-steps: .*' neartwo.out) > /dev/null && echo same)" <<'PY'
+import sys, h5py, numpy as np
+try:
+    a, b = h5py.File('near/particles.h5', 'r'), h5py.File('neartwo/particles.h5', 'r')
+    get = lambda f, q: f[f'suspension/{q}'][:].reshape(len(f['time']), 20, -1).transpose(1, 0, 2)
+    rel = max(np.abs(get(a, q)[:, -1] - get(b, q)[:, -1]).max() / np.abs(get(a, q)[:, -1]).max()
+              for q in ('position', 'velocity'))
+    ok = rel < 1.0e-9 and int(sys.argv[1]) >= 2 and sys.argv[2] == 'same' and len(b['time']) == 5
+    print(('PASS' if ok else 'FAIL') + f' suspension/point_near_1_and_2_ranks_agree  (largest relative difference '
+          f'{rel:.2e}; sub-step lines {"the same" if sys.argv[2] == "same" else "differ"})')
+except Exception as error:
+    print(f'FAIL suspension/point_near_1_and_2_ranks_agree: {error}')
+PY
+if h5diff -q neartwo/particles.h5 neartwosplit/particles.h5 && \
+   h5diff -q neartwo/checkpoints/checkpoint_0000000004.h5 neartwosplit/checkpoints/checkpoint_0000000004.h5; then
+  echo "PASS suspension/point_near_restart_bit_for_bit_on_2_ranks  (2 + 2 fluid steps: particles.h5 and the last checkpoint)"
+else echo "FAIL suspension/point_near_restart_bit_for_bit_on_2_ranks: $(grep -m1 error neartwo2.out)"; fi
 
 # --- ghost mode ---
 "$AGGLO" "$deck" --set run.max_steps=4000 --set run.end_time=1.0 --set suspension.ghost=.true. \

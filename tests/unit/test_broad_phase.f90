@@ -1,10 +1,12 @@
-! checks: 14
+! checks: 15
 !> Unit tests of broad_phase: the cell list finds exactly the pairs an independent brute force
 !> finds (every pair i < j, every periodic image tried, the nearest kept) on random polydisperse
 !> configurations: N from 2 to 3000, periodic cubes whose length is not a multiple of the cell
 !> width, bodies on the box faces and corners, a box of exactly 3 cells per side, boxes of 2 and 1
 !> cells per side, a slab (periodic in x and y only), no box at all, and a gap of huge() (every pair).
 !> The pair lists must agree element by element, in the order (first, second) of the pair list.
+!> A search shared out by stride (share = [s, 3], s = 1, 2, 3: shared_work's ranks) finds exactly the
+!> whole search's pairs whose first body is s, s + 3, ..., in the same order.
 program test_broad_phase
   use agglo_kinds, only: wp, i8
   use random_stream, only: random_stream_t, stream_seed, stream_uniform
@@ -26,6 +28,7 @@ program test_broad_phase
   call compare(1000, spread(29.9_wp, 1, 3), gap, 0.0_wp, 'periodic_1000', 0)
   call compare(3000, spread(43.1_wp, 1, 3), gap, 0.0_wp, 'periodic_3000', 0)
   call compare(3000, spread(43.1_wp, 1, 3), gap, 0.2_wp, 'periodic_3000_faces_and_corners', 0)
+  call compare(3000, spread(43.1_wp, 1, 3), gap, 0.2_wp, 'periodic_3000_shared_by_stride', 0, strided=.true.)
   call compare(400, spread(3.2_wp * width_min, 1, 3), gap, 0.2_wp, 'three_cells_per_side', 3)
   call check(all(finder%cells == 3), 'three_cells_per_side_used')
   call compare(100, spread(2.5_wp * width_min, 1, 3), gap, 0.2_wp, 'two_cells_per_side', 2)
@@ -43,14 +46,16 @@ contains
   !> n bodies of radius r0 (0.5 .. 1.5) at random in the box (or in a 40 r0 cube without a box);
   !> a fraction at_faces of them put on a face, an edge or a corner of the box (at 0 or just below
   !> L). expect_cells > 0: the cells per side the search must have used.
-  subroutine compare(n, box_length, search_gap, at_faces, name, expect_cells, quiet)
+  subroutine compare(n, box_length, search_gap, at_faces, name, expect_cells, quiet, strided)
     integer, intent(in) :: n, expect_cells
     real(wp), intent(in) :: box_length(3), search_gap, at_faces
     character(len=*), intent(in) :: name
-    logical, intent(in), optional :: quiet
+    logical, intent(in), optional :: quiet, strided
     real(wp) :: positions(3, n), radii(n), side(3)
     integer, allocatable :: first(:), second(:)
-    integer :: i, k
+    logical, allocatable :: in_share(:)
+    type(broad_phase_t) :: part
+    integer :: i, k, s
     logical :: same
     character(len=120) :: detail
     side = merge(box_length, 40.0_wp * r0, box_length > 0.0_wp)
@@ -72,6 +77,15 @@ contains
     write(detail, '(a,i0,a,i0,a,3(i0,1x),a,i0)') 'pairs ', finder%count, ' (brute force ', size(first), &
         '), cells ', finder%cells, ', distance tests ', finder%tests
     if (present(quiet)) return
+    if (present(strided)) then
+      do s = 1, 3
+        call broad_phase_find(part, positions, radii, box_length, search_gap, share=[s, 3])
+        in_share = mod(first - 1, 3) == s - 1
+        same = same .and. part%count == count(in_share) .and. count(in_share) > 0
+        if (same) same = all(part%first(1:part%count) == pack(first, in_share)) .and. &
+                         all(part%second(1:part%count) == pack(second, in_share))
+      end do
+    end if
     call check(same .and. size(first) > 0, name//'_equals_brute_force', trim(detail))
   end subroutine compare
 
