@@ -5,11 +5,11 @@
 module test_framework
   use, intrinsic :: iso_fortran_env, only: output_unit
   use mpi_f08, only: MPI_Initialized, MPI_Finalized, MPI_Comm_rank, MPI_COMM_WORLD, MPI_Finalize, &
-                     MPI_Allreduce, MPI_IN_PLACE, MPI_INTEGER, MPI_MAX
+                     MPI_Allreduce, MPI_IN_PLACE, MPI_INTEGER, MPI_MAX, MPI_MIN
   use agglo_kinds, only: wp
   implicit none
   private
-  public :: test_start, test_finish, check, check_close, check_below, check_above, check_equal
+  public :: test_start, test_finish, check, check_close, check_below, check_above, check_equal, on_every_rank
 
   integer :: passed = 0, failed = 0
   character(len=64) :: suite = ''
@@ -22,6 +22,16 @@ contains
     passed = 0
     failed = 0
   end subroutine test_start
+
+  !> ok holds on every rank (the same answer on each; collective): for a check each rank makes
+  !> of its own data, counted by a reduction of the test's own, not by the code under test.
+  logical function on_every_rank(ok)
+    logical, intent(in) :: ok
+    integer :: value
+    value = merge(1, 0, ok)
+    call MPI_Allreduce(MPI_IN_PLACE, value, 1, MPI_INTEGER, MPI_MIN, MPI_COMM_WORLD)
+    on_every_rank = (value == 1)
+  end function on_every_rank
 
   logical function on_root()
     logical :: up, down

@@ -3,12 +3,11 @@
 !> The agreements of parallel_env on 2 ranks that let a check made by one rank, or by each rank for
 !> itself, stop every rank together (error_handling: a collective stop needs every rank to call it):
 !> all_ranks (logical and), any_rank (logical or), root_text (rank 0's text everywhere). The ranks
-!> pass different values on purpose; each check holds on every rank (counted by a reduction written
-!> here, not by the routines under test).
+!> pass different values on purpose; each check holds on every rank
+!> (test_framework's on_every_rank: a reduction of the test's own, not the routines under test).
 program test_parallel_env
-  use mpi_f08, only: MPI_Allreduce, MPI_IN_PLACE, MPI_INTEGER, MPI_MIN, MPI_COMM_WORLD
   use parallel_env, only: parallel_start, my_rank, n_ranks, all_ranks, any_rank, root_text
-  use test_framework, only: test_start, test_finish, check, check_equal
+  use test_framework, only: test_start, test_finish, check, check_equal, on_every_rank
   implicit none
   character(len=:), allocatable :: shared
 
@@ -34,15 +33,4 @@ program test_parallel_env
   end if
   call check(on_every_rank(len(shared) == 0), 'root_text_empty_when_rank_0_passes_empty', shared)
   call test_finish()
-
-contains
-
-  !> ok holds on every rank (the same answer on each).
-  logical function on_every_rank(ok)
-    logical, intent(in) :: ok
-    integer :: value
-    value = merge(1, 0, ok)
-    call MPI_Allreduce(MPI_IN_PLACE, value, 1, MPI_INTEGER, MPI_MIN, MPI_COMM_WORLD)
-    on_every_rank = (value == 1)
-  end function on_every_rank
 end program test_parallel_env

@@ -3,14 +3,13 @@
 !> shared_work on 2 ranks: the blocks and the strides cut the items into disjoint shares that cover
 !> them all; share_columns gives every rank every block's columns as its owner computed them;
 !> any_of_ranks and sum_of_ranks combine the ranks' flags and counts. The ranks fill their shares
-!> with different values on purpose; each check holds on every rank (counted by a reduction written
-!> here, not by the routines under test).
+!> with different values on purpose; each check holds on every rank
+!> (test_framework's on_every_rank: a reduction of the test's own, not the routines under test).
 program test_shared_work
-  use mpi_f08, only: MPI_Allreduce, MPI_IN_PLACE, MPI_INTEGER, MPI_MIN, MPI_COMM_WORLD
   use agglo_kinds, only: wp, i8
   use parallel_env, only: parallel_start, my_rank, n_ranks
   use shared_work, only: rank_block, share_columns, rank_stride, any_of_ranks, sum_of_ranks
-  use test_framework, only: test_start, test_finish, check, check_equal
+  use test_framework, only: test_start, test_finish, check, check_equal, on_every_rank
   implicit none
   integer, parameter :: sizes(5) = [0, 1, 2, 7, 100001]
   real(wp), allocatable :: values(:, :)
@@ -71,13 +70,4 @@ contains
     real(wp) :: c(3)
     c = [real(i, wp), 1.0_wp / real(i, wp), sqrt(real(i, wp))]
   end function column
-
-  !> ok holds on every rank (the same answer on each).
-  logical function on_every_rank(ok)
-    logical, intent(in) :: ok
-    integer :: value
-    value = merge(1, 0, ok)
-    call MPI_Allreduce(MPI_IN_PLACE, value, 1, MPI_INTEGER, MPI_MIN, MPI_COMM_WORLD)
-    on_every_rank = (value == 1)
-  end function on_every_rank
 end program test_shared_work
