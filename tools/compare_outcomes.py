@@ -10,12 +10,16 @@ directions cancel in a rate).
 Usage (through the repository's venv, as tools/quiescent-study.sh does):
     .venv/bin/python tools/compare_outcomes.py BASE_ROOT VARIANT_ROOT [--label TEXT] [--csv FILE]
 Prints: runs compared, runs whose outcome changed, the transition table base -> variant, and the
-agglomeration rate of both with Wilson 95% intervals. With --csv, appends one row to FILE.
+agglomeration rate of both with Wilson 95% intervals; then the seeds whose outcome changed, the
+error of the first-contact normal speed of the variant against the base, (|v_n| - |v_n,base|) /
+|v_n,base| over the runs that touch in both (signed median and range), and the median wall time of
+a run of each (summary.json wall_time). With --csv, appends one row to FILE.
 Exit status: 0 done, 1 unusable input (no common complete run, seeds that differ).
 """
 import argparse
 import csv
 import os
+import statistics
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -51,6 +55,25 @@ def compare(base_root, variant_root):
     return common, transitions, base, variant
 
 
+def first_contact_errors(common, base, variant):
+    """(|v_n| - |v_n,base|) / |v_n,base| of the first collision, for the runs that touch in both."""
+    errors = []
+    for name in common:
+        first_base, first_variant = base[name].get("first_collision"), variant[name].get("first_collision")
+        if not (first_base and first_variant):
+            continue
+        speed_base = abs(first_base["normal_velocity_before"])
+        if speed_base > 0.0:
+            errors.append((abs(first_variant["normal_velocity_before"]) - speed_base) / speed_base)
+    return errors
+
+
+def median_wall(common, runs):
+    """The median wall_time of the runs as text ('unknown' when no summary has one)."""
+    walls = [runs[name]["wall_time"] for name in common if isinstance(runs[name].get("wall_time"), (int, float))]
+    return f"{statistics.median(walls):.1f} s" if walls else "unknown"
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("base", help="base batch root")
@@ -78,6 +101,16 @@ def main(argv=None):
     print("  base -> variant: " + ", ".join(
         f"{before} -> {after}: {transitions[(before, after)]}"
         for before in OUTCOMES for after in OUTCOMES if (before, after) in transitions))
+    changes = [f"{base[name]['seed']} {base[name]['outcome']} -> {variant[name]['outcome']}"
+               for name in common if base[name]["outcome"] != variant[name]["outcome"]]
+    print("  changed: " + ("; ".join(changes) if changes else "none"))
+    errors = first_contact_errors(common, base, variant)
+    if errors:
+        print(f"  first-contact normal speed, variant against base: {statistics.median(errors):+.1%} "
+              f"(signed median; {min(errors):+.1%} to {max(errors):+.1%}) over {len(errors)} runs touching in both")
+    else:
+        print("  first-contact normal speed, variant against base: no run touches in both")
+    print(f"  wall per run (median): base {median_wall(common, base)}, variant {median_wall(common, variant)}")
     if arguments.csv:
         new_file = not os.path.exists(arguments.csv)
         with open(arguments.csv, "a", newline="") as handle:

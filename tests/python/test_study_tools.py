@@ -677,3 +677,29 @@ def test_study_reuses_the_runs_of_an_identical_batch(spaced_tmp, agglo):
         assert os.path.samefile(first / "disk-none" / run / "summary.json", second / "disk-none" / run / "summary.json")
     assert (second / "disk-none" / "run_0003" / "summary.json").exists()
     assert not (first / "disk-none" / "run_0003").exists()
+
+
+def test_compare_outcomes_names_the_changed_seeds_and_the_first_contact_error(spaced_tmp):
+    """compare_outcomes.py: the seeds whose outcome changed, the signed error of the first-contact
+    normal speed over the runs that touch in both (median and range), the median wall per run."""
+    plan = {1: ("agglomerated", 1.0e-3, "rebounded", 1.2e-3), 2: ("agglomerated", 2.0e-3, "agglomerated", 2.2e-3),
+            3: ("agglomerated", 1.0e-3, "approached", None), 4: ("rebounded", 4.0e-3, "rebounded", 3.6e-3)}
+    for seed, (base_outcome, base_speed, variant_outcome, variant_speed) in plan.items():
+        for batch, outcome, speed, wall in (("base", base_outcome, base_speed, 10.0 + seed),
+                                            ("variant", variant_outcome, variant_speed, 20.0 + seed)):
+            directory = spaced_tmp / batch / f"run_{seed:04d}"
+            write_run(directory, seed, outcome=outcome)
+            with open(directory / "summary.json") as handle:
+                summary = json.load(handle)
+            if speed is not None:
+                summary["first_collision"]["normal_velocity_before"] = speed
+            summary["wall_time"] = wall
+            with open(directory / "summary.json", "w") as handle:
+                json.dump(summary, handle)
+    result = run_tool([PYTHON, REPO / "tools" / "compare_outcomes.py", spaced_tmp / "base", spaced_tmp / "variant"])
+    assert result.returncode == 0, result.stderr
+    assert "changed: 1 agglomerated -> rebounded; 3 agglomerated -> approached" in result.stdout
+    # +20%, +10%, -10%: seed 3 does not touch in the variant.
+    assert ("first-contact normal speed, variant against base: +10.0% (signed median; -10.0% to +20.0%) "
+            "over 3 runs touching in both") in result.stdout
+    assert "wall per run (median): base 12.5 s, variant 22.5 s" in result.stdout
