@@ -162,7 +162,8 @@ contains
         offsets(:, k) = [0, 1, 0]
       end if
     end do
-    ! Linked cells: bodies of each cell in increasing order (filled from the last body).
+    ! Linked cells: bodies of each cell in decreasing order (filled from the first body), so that a
+    ! body's search of a cell stops at the first partner j <= i: it never visits the others.
     if (allocated(finder%head)) then
       if (size(finder%head) < ncells) deallocate(finder%head)
     end if
@@ -173,7 +174,7 @@ contains
     if (.not. allocated(finder%next)) allocate(finder%next(n), finder%cell_of(3, n))
     if (.not. allocated(finder%row)) allocate(finder%row(64))
     finder%head(1:ncells) = 0
-    do i = n, 1, -1
+    do i = 1, n
       do k = 1, 3
         if (finder%cells(k) == 1) then
           cell(k) = 0
@@ -227,13 +228,9 @@ contains
       count_i = 0
       do m = 1, nneighbours
         j = finder%head(neighbour_cells(m))
-        do while (j /= 0)
-          if (j > i) then
-            finder%tests = finder%tests + 1_i8
-            if (surely_apart(positions(:, i), positions(:, j), radii(i) + radii(j) + gap, box_length)) then
-              j = finder%next(j)
-              cycle
-            end if
+        do while (j > i)   ! the end of the list (0) or the first j <= i
+          finder%tests = finder%tests + 1_i8
+          if (.not. surely_apart(positions(:, i), positions(:, j), radii(i) + radii(j) + gap, box_length)) then
             if (near_pair(positions(:, i), positions(:, j), radii(i), radii(j), box_length, gap)) then
               count_i = count_i + 1
               if (count_i > size(finder%row)) finder%row = [finder%row, finder%row]
